@@ -1,0 +1,105 @@
+# drape: GNU-style Makefile.  See README.md.
+#
+#   make deps      install the Debian packages drape needs (apt-get, only
+#                  when one is missing)
+#   make / all     build ./drape
+#   make run       run the default scene (scenes/cusick.yaml)
+#   make check     build and run the Check test suite
+#   make install   install drape into $(DESTDIR)$(PREFIX)/bin
+#   make clean
+
+CC      ?= cc
+PREFIX  ?= /usr/local
+BINDIR  ?= $(PREFIX)/bin
+CFLAGS  ?= -O2 -g
+LDFLAGS ?=
+
+DEB_PACKAGES = libgsl-dev libsundials-dev libsuitesparse-dev libhdf5-dev \
+               libyaml-dev check pkg-config libopenblas-dev \
+               libgeos-dev
+
+# Flags drape itself needs (not overridable: the language level is part of
+# the code).  pkg-config is expanded lazily, so `make deps all` works on a
+# machine that has none of the packages yet.
+PKGS        = gsl yaml-0.1 hdf5-serial geos
+DRAPE_CPPFLAGS = -Iinclude -I/usr/include/suitesparse \
+                 $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+DRAPE_CFLAGS = -std=c99 -D_POSIX_C_SOURCE=200809L -Wall -Wextra \
+               -Wmissing-prototypes -Wstrict-prototypes -Wshadow
+# SUNDIALS 6.4.1 and KLU ship no .pc files: link them by name.  GSL's BLAS
+# is OpenBLAS, not the reference gslcblas (numerics.md, section 2).
+DRAPE_LIBS  = -lsundials_arkode -lsundials_cvode -lsundials_kinsol \
+              -lsundials_nvecserial -lsundials_sunmatrixsparse \
+              -lsundials_sunlinsolklu -lsundials_sunlinsolspgmr \
+              -lklu -lcholmod -lsuitesparseconfig \
+              -lgsl -lopenblas \
+              $(shell pkg-config --libs yaml-0.1 hdf5-serial geos 2>/dev/null) -lm
+CHECK_CFLAGS = $(shell pkg-config --cflags check 2>/dev/null)
+CHECK_LIBS   = $(shell pkg-config --libs check 2>/dev/null)
+
+ALL_CFLAGS = $(DRAPE_CPPFLAGS) $(DRAPE_CFLAGS) $(CPPFLAGS) $(CFLAGS)
+
+# Objects go to $(O) (default build/); `make O=/tmp/x LIB_SRC=... TEST_SRC=...
+# unit` builds and runs a subset of the suites out of tree.
+O        ?= build
+LIB_SRC  ?= $(filter-out src/main.c src/cli_%.c,$(wildcard src/*.c))
+CLI_SRC  ?= src/main.c $(wildcard src/cli_*.c)
+TEST_SRC ?= $(wildcard tests/check_*.c)
+LIB_OBJ  = $(LIB_SRC:%.c=$(O)/%.o)
+CLI_OBJ  = $(CLI_SRC:%.c=$(O)/%.o)
+TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(O)/tests/testutil.o
+HEADERS  = $(wildcard include/drape/*.h)
+
+.PHONY: all deps run check unit install clean
+
+all: drape
+
+deps:
+	@missing=""; for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'ok installed' || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $$missing; \
+	else echo "all Debian packages present"; fi
+
+$(O)/libdrape.a: $(LIB_OBJ)
+	$(AR) rcs $@ $(LIB_OBJ)
+
+drape: $(CLI_OBJ) $(O)/libdrape.a
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $(CLI_OBJ) $(O)/libdrape.a $(DRAPE_LIBS)
+
+$(O)/src/%.o: src/%.c $(HEADERS)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -c -o $@ $<
+
+$(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h $(O)/tests/suites.gen.h
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CHECK_CFLAGS) -I$(O)/tests -c -o $@ $<
+
+# The runner learns the suites from the file names: tests/check_NOUN.c
+# exports `Suite *NOUN_suite(void)`.
+$(O)/tests/suites.gen.h: $(TEST_SRC) Makefile
+	@mkdir -p $(dir $@)
+	@{ for f in $(TEST_SRC); do n=$$(basename $$f .c); n=$${n#check_}; \
+	   echo "SUITE($$n)"; done; } > $@.tmp && mv $@.tmp $@
+
+$(O)/tests/check_drape: $(TEST_OBJ) $(O)/libdrape.a
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $(TEST_OBJ) $(O)/libdrape.a $(DRAPE_LIBS) $(CHECK_LIBS)
+
+run: drape
+	./drape run scenes/cusick.yaml
+
+# Tests run from tests/ so they find ../scenes, ../fabrics and ../drape.
+check: drape $(O)/tests/check_drape
+	cd tests && DRAPE_BIN=$(abspath drape) $(abspath $(O))/tests/check_drape
+
+unit: $(O)/tests/check_drape
+	cd tests && $(abspath $(O))/tests/check_drape
+
+install: drape
+	install -d $(DESTDIR)$(BINDIR)
+	install -m 755 drape $(DESTDIR)$(BINDIR)/drape
+
+clean:
+	rm -rf drape build

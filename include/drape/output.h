@@ -1,0 +1,107 @@
+/* output.h: frame files of a run (issue 3 item 5; docs/outputs.md).
+ *
+ * Two writers, both opaque handles that borrow the lattice (it must
+ * outlive them) and write every file under a temporary name in the target
+ * directory (NAME.PID.tmp), renaming it to NAME only when it is complete,
+ * so a reader never sees a partial file.  The directory must exist.  All
+ * errors are E_IO (or E_NOMEM) with the path in the message.
+ *
+ *  - OBJ: one Wavefront OBJ per frame, `frame_000000.obj`, ...: `v`
+ *    positions (Y-up: OBJ (X, Y, Z) = drape (x, z, -y)), `vt` from the
+ *    rest lattice, `vn` area-weighted vertex normals, quad faces `f a/a/a`
+ *    (1-based particle id + 1), a header comment with time, units, names.
+ *
+ *  - HDF5: `drape.h5` (SI units, drape axes, z up) and its XDMF sidecar
+ *    `drape.xmf` for ParaView, written when the run closes:
+ *      /mesh/rest_positions [n][3] f64, /mesh/quads [nq][4] i32 (0-based
+ *      particle ids, counter-clockwise from +z at rest), /mesh/fixed [n] u8,
+ *      /mesh/grid_ij [n][2] i32; attributes sigma_m, area_nominal_m2
+ *      /steps/NNNNNN/positions [n][3] f64 (attribute time_s; the group has
+ *      it too), /steps/NNNNNN/velocities [n][3] when given
+ *      /times [frames] f64 (s), /energies/{kinetic,stretch,bend,shear,
+ *      gravity} [frames] f64 (J)
+ *      /final/positions, /final/velocities, attribute time_s
+ *      /stats: one attribute per key (f64 or string)
+ *      root attributes: fabric_yaml, scene_yaml (full texts), creator,
+ *      format ("drape-h5 1"), units.
+ *    drape.xmf: a temporal collection of Uniform grids, one per frame,
+ *    Quadrilateral topology from drape.h5:/mesh/quads, XYZ geometry from
+ *    drape.h5:/steps/NNNNNN/positions (paths relative to the .xmf).
+ */
+#ifndef DRAPE_OUTPUT_H
+#define DRAPE_OUTPUT_H
+
+#include "drape/error.h"
+#include "drape/lattice.h"
+#include "drape/model.h"
+
+/* ---- OBJ ---------------------------------------------------------------- */
+
+typedef struct drape_obj drape_obj;
+
+/* Prepare OBJ output into directory dir (must exist) for lattice L:
+ * faces, texture coordinates, workspaces.  fabric and scene are names for
+ * the header comment (may be NULL).  Returns NULL with err set (E_IO if dir
+ * is not a writable directory, E_NOMEM).  Caller frees with drape_obj_free. */
+drape_obj *drape_obj_new(const char *dir, const drape_lattice *L,
+                         const char *fabric, const char *scene,
+                         drape_error *err);
+void drape_obj_free(drape_obj *o);
+
+/* Write positions x (3n, m) at time t_s as DIR/frame_%06d.obj (frame >= 0).
+ * Returns 0 or -1 with err set. */
+int drape_obj_frame(drape_obj *o, int frame, double t_s, const double *x,
+                    drape_error *err);
+
+/* The same to an explicit path (renamed into place from PATH.PID.tmp). */
+int drape_obj_write(drape_obj *o, const char *path, double t_s,
+                    const double *x, drape_error *err);
+
+/* ---- HDF5 + XDMF -------------------------------------------------------- */
+
+typedef struct drape_h5 drape_h5;
+
+/* A statistic for /stats: a string when text != NULL, else the number. */
+typedef struct drape_kv {
+    const char *key;
+    const char *text;
+    double value;
+} drape_kv;
+
+/* What drape_h5_close stores besides the frames.  Every pointer may be
+ * NULL (then that part is left out). */
+typedef struct drape_h5_final {
+    double t_s;               /* time of the final state */
+    const double *x, *v;      /* final positions and velocities, 3n */
+    const drape_kv *stats;    /* n_stats key/value pairs -> /stats */
+    int n_stats;
+    const char *fabric_yaml;  /* full text of the fabric file */
+    const char *scene_yaml;   /* full text of the scene file */
+} drape_h5_final;
+
+/* Create DIR/drape.h5 (under a temporary name) and write /mesh.  Switches
+ * off HDF5's automatic error printing (H5Eset_auto2).  Returns NULL with
+ * err set.  Finish with drape_h5_close or drape_h5_discard. */
+drape_h5 *drape_h5_open(const char *dir, const drape_lattice *L,
+                        drape_error *err);
+
+/* Append a frame: positions x (3n), velocities v (3n, may be NULL), the
+ * kinetic energy and the potential energies by term (E may be NULL: NaN is
+ * stored).  Returns 0 or -1 with err set. */
+int drape_h5_frame(drape_h5 *h, double t_s, const double *x, const double *v,
+                   double kinetic_J, const drape_energies *E,
+                   drape_error *err);
+
+/* Number of frames written so far. */
+int drape_h5_frames(const drape_h5 *h);
+
+/* Write /times, /energies, fin (may be NULL), close the file, write the
+ * XDMF sidecar and rename both into place.  Frees h in every case; on
+ * failure removes the temporary files and returns -1 with err set. */
+int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err);
+
+/* Close without keeping anything (temporary files removed); NULL is a
+ * no-op. */
+void drape_h5_discard(drape_h5 *h);
+
+#endif /* DRAPE_OUTPUT_H */

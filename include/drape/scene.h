@@ -1,0 +1,125 @@
+/* scene.h: what to simulate, loaded from a scene YAML file.
+ *
+ * Scenes (MODEL.md section 5): cusick, hang, table, cantilever.  See
+ * the files in scenes/ and docs/scenes.md for every key, its unit and
+ * default.
+ * All quantities are stored in SI.  The fabric path is resolved relative to
+ * the directory of the scene file.
+ */
+#ifndef DRAPE_SCENE_H
+#define DRAPE_SCENE_H
+
+#include "drape/error.h"
+#include "drape/fabric.h"
+
+#define DRAPE_SCENE_MAX_PINS 64
+#define DRAPE_INTEGRATOR_NAME_MAX 32
+
+typedef enum drape_scene_kind {
+    DRAPE_SCENE_CUSICK,
+    DRAPE_SCENE_HANG,
+    DRAPE_SCENE_TABLE,
+    DRAPE_SCENE_CANTILEVER
+} drape_scene_kind;
+
+typedef enum drape_shape {
+    DRAPE_SHAPE_RECTANGLE,
+    DRAPE_SHAPE_CIRCLE,
+    DRAPE_SHAPE_STRIP
+} drape_shape;
+
+typedef enum drape_energy_form {
+    DRAPE_FORM_CONSISTENT, /* MODEL.md 3.2/3.3 default */
+    DRAPE_FORM_SEED        /* the paper as printed */
+} drape_energy_form;
+
+/* Energy terms (bit mask). */
+enum {
+    DRAPE_TERM_STRETCH = 1u << 0,
+    DRAPE_TERM_BEND = 1u << 1,
+    DRAPE_TERM_SHEAR = 1u << 2,
+    DRAPE_TERM_GRAVITY = 1u << 3,
+    DRAPE_TERM_ALL = 0xfu
+};
+
+typedef enum drape_table_shape { DRAPE_TABLE_SQUARE, DRAPE_TABLE_ROUND } drape_table_shape;
+
+/* Where a key was written in the scene file (1-based; 0 if unknown or
+ * defaulted), kept so that errors found after loading
+ * (drape_scene_check_with_fabric) can point at the key. */
+typedef struct drape_scene_pos {
+    int line, column;
+} drape_scene_pos;
+
+typedef struct drape_scene {
+    char path[DRAPE_ERROR_FILE_MAX];        /* the scene file */
+    char fabric_path[DRAPE_ERROR_FILE_MAX]; /* resolved against the scene's directory */
+    drape_scene_kind kind;
+
+    /* specimen */
+    drape_shape shape;
+    double width;     /* rectangle: along x (weft), m; strip: across, m */
+    double height;    /* rectangle: along y (warp), m */
+    double diameter;  /* circle, m */
+    double length;    /* strip, m */
+    drape_dir strip_dir; /* strip: material direction of its length */
+
+    double support_diameter;       /* cusick, m (default 0.18) */
+    drape_table_shape table_shape; /* table */
+    double table_size;             /* table: side (square) or diameter (round), m */
+    double overhang;               /* cantilever, m */
+    double spacing;                /* lattice spacing sigma, m */
+
+    int has_perturbation;
+    double perturb_amplitude;      /* m */
+    unsigned long perturb_seed;
+
+    int n_pins;
+    int pins[DRAPE_SCENE_MAX_PINS][2]; /* (i, j); negative counts from the end */
+
+    drape_energy_form energy_form;
+    unsigned terms;                /* DRAPE_TERM_* mask */
+
+    double damping_air;            /* 1/s, 0 = off */
+    double damping_edge;           /* N.s/m, 0 = off */
+
+    char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* default "auto" */
+    double rtol, atol;             /* defaults 1e-4, 1e-7 */
+    int max_order;                 /* solver.max_order (1-5), 0 = integrator's default */
+
+    int has_equilibrium;
+    double eq_speed;               /* m/s (default 1e-4) */
+    double eq_window;              /* s (default 0.2) */
+    double t_max;                  /* s */
+
+    int has_frames;
+    double frame_every;            /* s */
+    int out_obj, out_hdf5;
+
+    /* Source positions of the values checked by
+     * drape_scene_check_with_fabric (spacing, the pins key, support.diameter,
+     * the table size, overhang, the specimen's size). */
+    drape_scene_pos at_spacing, at_pins, at_support, at_table, at_overhang,
+        at_specimen;
+} drape_scene;
+
+/* Known integrator names, NULL-terminated (for validation and --help). */
+extern const char *const drape_integrator_names[];
+
+/* Load a scene file (does not load the fabric).  Returns 0 and fills *s, or
+ * -1 and fills err with file, line, column, key path.  warn may be NULL. */
+int drape_scene_load(const char *path, drape_scene *s, drape_error *err,
+                     drape_warn_fn warn, void *warn_ctx);
+
+/* Checks that need both files: support or table larger than the specimen,
+ * overhang longer than the strip, pins outside the lattice, a lattice that
+ * would not fit in memory (estimated before allocating).  Errors name the
+ * scene file and key. */
+int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
+                                  drape_error *err);
+
+/* Names for output. */
+const char *drape_scene_kind_name(drape_scene_kind k);
+const char *drape_energy_form_name(drape_energy_form f);
+
+#endif /* DRAPE_SCENE_H */

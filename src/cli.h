@@ -1,0 +1,22 @@
+/* cli.h: private interface between the command-line files (main.c,
+ * cli_*.c).  Only these files print or exit. */
+#ifndef DRAPE_CLI_H
+#define DRAPE_CLI_H
+
+#include <stdio.h>
+
+#include "drape/error.h"
+
+#define DRAPE_VERSION "0.1.0"
+
+/* Print "drape: <formatted error>" to stderr. */
+void drape_cli_print_error(const drape_error *e);
+/* Warning callback for loaders: "drape: FILE:LINE:COL: key: warning: ...". */
+void drape_cli_warn(void *ctx, const drape_error *w);
+
+/* Subcommands: argc/argv start at the subcommand name; return the exit
+ * status. */
+int drape_cli_check(int argc, char **argv);
+int drape_cli_run(int argc, char **argv);
+
+#endif

@@ -1,0 +1,454 @@
+/* cli_run.c: `drape run [SCENE.yaml] [options]`: load a scene and its
+ * fabric, build the lattice and model, integrate, measure, and print one
+ * JSON object (or a CSV header and row) on stdout.  Frames (OBJ, HDF5 +
+ * XDMF) are written only with --out DIR.  Progress goes to stderr only when
+ * it is a terminal.  Keys of the result are a contract (issue 3). */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "drape/alloc.h"
+#include "drape/drape.h"
+#include "drape/fabric.h"
+#include "drape/lattice.h"
+#include "drape/model.h"
+#include "drape/output.h"
+#include "drape/scene.h"
+#include "drape/sim.h"
+#include "drape/units.h"
+
+#define DEFAULT_SCENE "scenes/cusick.yaml"
+
+static const char run_usage[] =
+    "Usage: drape run [SCENE.yaml] [OPTIONS]\n"
+    "\n"
+    "Run a scene (default " DEFAULT_SCENE ") and print one JSON object on\n"
+    "stdout with the result in SI units (keys: fabric, scene, integrator,\n"
+    "energy_form, rtol, atol, spacing_m, particles, free_particles, status,\n"
+    "t_end_s, dc, nodes, r_min_m, r_max_m, tip_angle_deg, bending_length_m,\n"
+    "flexural_rigidity_Nm, energy_J{kinetic,stretch,bend,shear,gravity},\n"
+    "max_strain, wall_s, steps, rhs_evals, jac_evals, lin_setups, nonlin_iters,\n"
+    "err_test_fails, conv_fails; null where the scene does not produce one).\n"
+    "status is equilibrium, t_max or failed.\n"
+    "\n"
+    "Options (override the scene file):\n"
+    "  --fabric FILE            fabric file instead of the scene's\n"
+    "  --integrator NAME        auto, arkode-imex, arkode-dirk, arkode-erk,\n"
+    "                           cvode-bdf, gsl-msbdf, gsl-rk8pd\n"
+    "  --rtol X, --atol X       tolerances (atol on positions, m)\n"
+    "  --spacing LEN            lattice spacing, e.g. 5mm or '0.5 cm'\n"
+    "  --energy-form FORM       consistent or seed\n"
+    "  --t-max T                end time, e.g. 3s\n"
+    "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR\n"
+    "  --format json|csv        result format on stdout (default json)\n"
+    "  -q, --quiet              no progress on stderr\n"
+    "  -h, --help               show this help\n"
+    "\n"
+    "Exit status: 0 equilibrium or t_max, 1 invalid input, 2 bad command line,\n"
+    "3 I/O error, 4 the run failed (numerical), 5 out of memory.\n";
+
+/* ---- result fields ----------------------------------------------------- */
+
+typedef struct field {
+    const char *key;
+    const char *text; /* string value, or NULL */
+    double value;     /* number; NaN prints null */
+    int is_int;
+} field;
+
+#define MAX_FIELDS 48
+
+typedef struct result_fields {
+    field f[MAX_FIELDS];
+    int n;
+} result_fields;
+
+static void add_num(result_fields *r, const char *key, double v)
+{
+    r->f[r->n++] = (field){key, NULL, v, 0};
+}
+static void add_int(result_fields *r, const char *key, double v)
+{
+    r->f[r->n++] = (field){key, NULL, v, 1};
+}
+static void add_str(result_fields *r, const char *key, const char *s)
+{
+    r->f[r->n++] = (field){key, s, 0.0, 0};
+}
+
+static void json_string(FILE *out, const char *s)
+{
+    fputc('"', out);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') fprintf(out, "\\%c", c);
+        else if (c < 0x20) fprintf(out, "\\u%04x", c);
+        else fputc(c, out);
+    }
+    fputc('"', out);
+}
+
+static void print_value(FILE *out, const field *f, int json)
+{
+    if (f->text) {
+        if (json) json_string(out, f->text);
+        else fputs(f->text, out);
+    } else if (!isfinite(f->value) || (f->is_int && f->value < 0)) {
+        fputs(json ? "null" : "", out);
+    } else if (f->is_int) {
+        fprintf(out, "%.0f", f->value);
+    } else {
+        fprintf(out, "%.10g", f->value);
+    }
+}
+
+/* Keys "energy_J.kinetic" are nested in JSON and flattened with '_' in CSV. */
+static void print_json(FILE *out, const result_fields *r)
+{
+    fputc('{', out);
+    const char *group = NULL;
+    size_t glen = 0;
+    for (int i = 0; i < r->n; i++) {
+        const char *k = r->f[i].key, *dot = strchr(k, '.');
+        if (group && (!dot || (size_t)(dot - k) != glen || strncmp(k, group, glen) != 0)) {
+            fputc('}', out);
+            group = NULL;
+        }
+        if (i) fputs(", ", out);
+        if (dot && !group) {
+            group = k;
+            glen = (size_t)(dot - k);
+            fprintf(out, "\"%.*s\": {", (int)glen, k);
+        }
+        fprintf(out, "\"%s\": ", dot ? dot + 1 : k);
+        print_value(out, &r->f[i], 1);
+    }
+    if (group) fputc('}', out);
+    fputs("}\n", out);
+}
+
+static void print_csv(FILE *out, const result_fields *r)
+{
+    for (int i = 0; i < r->n; i++) {
+        if (i) fputc(',', out);
+        for (const char *k = r->f[i].key; *k; k++) fputc(*k == '.' ? '_' : *k, out);
+    }
+    fputc('\n', out);
+    for (int i = 0; i < r->n; i++) {
+        if (i) fputc(',', out);
+        print_value(out, &r->f[i], 0);
+    }
+    fputc('\n', out);
+}
+
+/* ---- observers ------------------------------------------------------------ */
+
+typedef struct run_ctx {
+    drape_model *model;
+    drape_obj *obj;
+    drape_h5 *h5;
+    int frame;
+    int progress; /* print progress on stderr */
+    double t_max;
+} run_ctx;
+
+static int observe(void *ctx, const drape_sim_event *ev, drape_error *err)
+{
+    run_ctx *c = ctx;
+    if (c->progress) {
+        fprintf(stderr, "\rdrape: t = %8.4f s of %g s, %ld steps, max speed %.3g m/s ",
+                ev->t, c->t_max, ev->steps, ev->max_speed);
+        if (ev->what & DRAPE_SIM_AT_END) fputc('\n', stderr);
+    }
+    if (!(ev->what & (DRAPE_SIM_AT_START | DRAPE_SIM_AT_FRAME | DRAPE_SIM_AT_END)))
+        return 0;
+    if (c->obj && drape_obj_frame(c->obj, c->frame, ev->t, ev->x, err) != 0) return -1;
+    if (c->h5) {
+        drape_energies E;
+        double ke = drape_sim_kinetic_energy(drape_model_lattice(c->model), ev->v);
+        if (drape_model_energy(c->model, ev->x, &E) != 0) {
+            E.stretch = E.bend = E.shear = E.gravity = NAN;
+        }
+        if (drape_h5_frame(c->h5, ev->t, ev->x, ev->v, ke, &E, err) != 0) return -1;
+    }
+    c->frame++;
+    return 0;
+}
+
+/* ---- option parsing ------------------------------------------------------- */
+
+static int usage_error(const char *fmt, const char *a, const char *b)
+{
+    fputs("drape: ", stderr);
+    fprintf(stderr, fmt, a, b);
+    fputs("\nTry `drape run --help'.\n", stderr);
+    return drape_error_exit_status(DRAPE_E_USAGE);
+}
+
+static int parse_quantity(const char *opt, const char *text, drape_dim dim,
+                          double *v)
+{
+    char why[256];
+    if (drape_units_parse(text, dim, v, why, sizeof why) != 0) {
+        usage_error("%s: %s", opt, why);
+        return -1;
+    }
+    return 0;
+}
+
+static char *slurp_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    size_t cap = 4096, n = 0;
+    char *buf = drape_malloc(cap);
+    while (buf) {
+        size_t k = fread(buf + n, 1, cap - n - 1, f);
+        n += k;
+        if (k == 0) break;
+        if (n + 1 >= cap) {
+            char *nb = drape_realloc(buf, cap * 2);
+            if (!nb) { drape_free(buf); buf = NULL; break; }
+            buf = nb;
+            cap *= 2;
+        }
+    }
+    fclose(f);
+    if (buf) buf[n] = 0;
+    return buf;
+}
+
+static int ensure_dir(const char *dir, drape_error *err)
+{
+    struct stat st;
+    if (stat(dir, &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return 0;
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: not a directory");
+    }
+    if (mkdir(dir, 0777) != 0)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "--out: cannot create directory: %s", strerror(errno));
+    return 0;
+}
+
+int drape_cli_run(int argc, char **argv)
+{
+    enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
+           O_TMAX, O_OUT, O_FORMAT };
+    static const struct option opts[] = {
+        {"fabric", required_argument, NULL, O_FABRIC},
+        {"integrator", required_argument, NULL, O_INTEGRATOR},
+        {"rtol", required_argument, NULL, O_RTOL},
+        {"atol", required_argument, NULL, O_ATOL},
+        {"spacing", required_argument, NULL, O_SPACING},
+        {"energy-form", required_argument, NULL, O_FORM},
+        {"t-max", required_argument, NULL, O_TMAX},
+        {"out", required_argument, NULL, O_OUT},
+        {"format", required_argument, NULL, O_FORMAT},
+        {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0}};
+    const char *fabric_path = NULL, *integrator = NULL, *form = NULL, *out_dir = NULL;
+    double rtol = 0, atol = 0, spacing = 0, t_max = 0;
+    int csv = 0, quiet = 0, c;
+    while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
+        switch (c) {
+        case O_FABRIC: fabric_path = optarg; break;
+        case O_INTEGRATOR: integrator = optarg; break;
+        case O_RTOL:
+            if (parse_quantity("--rtol", optarg, DRAPE_DIM_NONE, &rtol)) return 2;
+            if (!(rtol > 0 && rtol < 1)) return usage_error("--rtol: must be in (0, 1), got %s%s", optarg, "");
+            break;
+        case O_ATOL:
+            if (parse_quantity("--atol", optarg, DRAPE_DIM_LENGTH, &atol)) return 2;
+            if (!(atol > 0)) return usage_error("--atol: must be positive, got %s%s", optarg, "");
+            break;
+        case O_SPACING:
+            if (parse_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, &spacing)) return 2;
+            if (!(spacing > 0)) return usage_error("--spacing: must be positive, got %s%s", optarg, "");
+            break;
+        case O_FORM: form = optarg; break;
+        case O_TMAX:
+            if (parse_quantity("--t-max", optarg, DRAPE_DIM_TIME, &t_max)) return 2;
+            if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
+            break;
+        case O_OUT: out_dir = optarg; break;
+        case O_FORMAT:
+            if (strcmp(optarg, "json") == 0) csv = 0;
+            else if (strcmp(optarg, "csv") == 0) csv = 1;
+            else return usage_error("--format: expected json or csv, got `%s'%s", optarg, "");
+            break;
+        case 'q': quiet = 1; break;
+        case 'h': fputs(run_usage, stdout); return 0;
+        default:
+            fputs("Try `drape run --help'.\n", stderr);
+            return drape_error_exit_status(DRAPE_E_USAGE);
+        }
+    }
+    if (argc - optind > 1) return usage_error("run: one scene at a time, got `%s' and `%s'", argv[optind], argv[optind + 1]);
+    const char *scene_path = optind < argc ? argv[optind] : DEFAULT_SCENE;
+    if (integrator) {
+        int ok = 0;
+        for (int i = 0; drape_integrator_names[i]; i++)
+            ok |= strcmp(drape_integrator_names[i], integrator) == 0;
+        if (!ok) return usage_error("--integrator: unknown integrator `%s'%s; see `drape run --help'", integrator, "");
+    }
+    if (form && strcmp(form, "consistent") && strcmp(form, "seed"))
+        return usage_error("--energy-form: expected consistent or seed, got `%s'%s", form, "");
+
+    drape_error err;
+    drape_error_clear(&err);
+    drape_scene s;
+    drape_fabric f;
+    drape_lattice *L = NULL;
+    drape_model *m = NULL;
+    drape_dc *dc = NULL;
+    run_ctx rc;
+    memset(&rc, 0, sizeof rc);
+    drape_sim_result res;
+    memset(&res, 0, sizeof res);
+    char *fabric_text = NULL, *scene_text = NULL;
+    int status = 0, sim_ok = 0;
+
+    if (drape_scene_load(scene_path, &s, &err, drape_cli_warn, NULL) != 0) goto fail;
+    if (fabric_path) snprintf(s.fabric_path, sizeof s.fabric_path, "%s", fabric_path);
+    if (integrator) snprintf(s.integrator, sizeof s.integrator, "%s", integrator);
+    if (rtol > 0) s.rtol = rtol;
+    if (atol > 0) s.atol = atol;
+    if (spacing > 0) s.spacing = spacing;
+    if (t_max > 0) s.t_max = t_max;
+    if (form) s.energy_form = strcmp(form, "seed") == 0 ? DRAPE_FORM_SEED : DRAPE_FORM_CONSISTENT;
+
+    if (drape_fabric_load(s.fabric_path, &f, &err, drape_cli_warn, NULL) != 0) goto fail;
+    if (drape_scene_check_with_fabric(&s, &f, &err) != 0) goto fail;
+    L = drape_lattice_new(&s, &f, &err);
+    if (!L) goto fail;
+    drape_model_opts mo;
+    drape_model_opts_from_scene(&s, &mo);
+    m = drape_model_new(L, &f, &mo, &err);
+    if (!m) goto fail;
+
+    if (out_dir) {
+        if (ensure_dir(out_dir, &err) != 0) goto fail;
+        if (s.has_frames && s.out_obj) {
+            rc.obj = drape_obj_new(out_dir, L, f.name, drape_scene_kind_name(s.kind), &err);
+            if (!rc.obj) goto fail;
+        }
+        if (s.out_hdf5) {
+            rc.h5 = drape_h5_open(out_dir, L, &err);
+            if (!rc.h5) goto fail;
+        }
+    }
+    rc.model = m;
+    rc.progress = !quiet && isatty(STDERR_FILENO);
+    rc.t_max = s.t_max;
+
+    drape_sim_opts so;
+    drape_sim_opts_from_scene(&s, &so);
+    so.observe_progress = rc.progress;
+    sim_ok = drape_sim_run(m, &so, (rc.obj || rc.h5 || rc.progress) ? observe : NULL, &rc,
+                           &res, &err) == 0;
+    if (!sim_ok && err.kind != DRAPE_E_NUMERIC) goto fail; /* I/O or input: no result */
+    if (!sim_ok) {
+        drape_cli_print_error(&err);
+        status = drape_error_exit_status(err.kind);
+    }
+
+    /* measurements on the final state */
+    drape_shadow sh;
+    int have_dc = 0, have_cant = 0;
+    drape_cantilever cant;
+    if (sim_ok && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE)) {
+        drape_error e2;
+        drape_error_clear(&e2);
+        dc = drape_dc_new(L, NULL, &e2);
+        if (dc && drape_dc_measure(dc, res.x, &sh, &e2) == 0) have_dc = 1;
+        else drape_cli_print_error(&e2);
+    }
+    if (sim_ok && s.kind == DRAPE_SCENE_CANTILEVER) {
+        drape_error e2;
+        drape_error_clear(&e2);
+        if (drape_cantilever_measure(L, res.x, f.weight, DRAPE_G_STANDARD, &cant, &e2) == 0)
+            have_cant = 1;
+        else drape_cli_print_error(&e2);
+    }
+
+    result_fields r;
+    r.n = 0;
+    add_str(&r, "fabric", f.name);
+    add_str(&r, "scene", drape_scene_kind_name(s.kind));
+    add_str(&r, "integrator", res.integrator[0] ? res.integrator : s.integrator);
+    add_str(&r, "energy_form", drape_energy_form_name(s.energy_form));
+    add_num(&r, "rtol", s.rtol);
+    add_num(&r, "atol", s.atol);
+    add_num(&r, "spacing_m", s.spacing);
+    add_int(&r, "particles", L->n);
+    add_int(&r, "free_particles", L->n_free);
+    add_str(&r, "status", drape_sim_status_name(res.status));
+    add_num(&r, "t_end_s", res.t_end_s);
+    add_num(&r, "dc", have_dc ? sh.dc : NAN);
+    add_int(&r, "nodes", have_dc ? sh.nodes : NAN);
+    add_num(&r, "r_min_m", have_dc ? sh.r_min_m : NAN);
+    add_num(&r, "r_max_m", have_dc ? sh.r_max_m : NAN);
+    add_num(&r, "tip_angle_deg", have_cant ? cant.tip_angle_deg : NAN);
+    add_num(&r, "bending_length_m", have_cant ? cant.bending_length_m : NAN);
+    add_num(&r, "flexural_rigidity_Nm", have_cant ? cant.flexural_rigidity_Nm : NAN);
+    add_num(&r, "energy_J.kinetic", sim_ok ? res.kinetic_J : NAN);
+    add_num(&r, "energy_J.stretch", sim_ok ? res.energy.stretch : NAN);
+    add_num(&r, "energy_J.bend", sim_ok ? res.energy.bend : NAN);
+    add_num(&r, "energy_J.shear", sim_ok ? res.energy.shear : NAN);
+    add_num(&r, "energy_J.gravity", sim_ok ? res.energy.gravity : NAN);
+    add_num(&r, "max_strain", sim_ok ? res.max_strain : NAN);
+    add_num(&r, "wall_s", res.wall_s);
+    add_int(&r, "steps", res.stats.steps);
+    add_int(&r, "rhs_evals", res.stats.rhs_evals);
+    add_int(&r, "jac_evals", res.stats.jac_evals);
+    add_int(&r, "lin_setups", res.stats.lin_setups);
+    add_int(&r, "nonlin_iters", res.stats.nonlin_iters);
+    add_int(&r, "err_test_fails", res.stats.err_test_fails);
+    add_int(&r, "conv_fails", res.stats.conv_fails);
+    add_num(&r, "mass_kg", L->mass_total);
+    add_num(&r, "area_nominal_m2", L->area_nominal);
+    add_num(&r, "area_mesh_m2", have_dc ? sh.a_specimen_mesh_m2 : NAN);
+    add_num(&r, "max_speed_m_s", res.max_speed);
+
+    if (rc.obj) { drape_obj_free(rc.obj); rc.obj = NULL; }
+    if (rc.h5) {
+        drape_kv kv[MAX_FIELDS];
+        int nkv = 0;
+        for (int i = 0; i < r.n; i++)
+            kv[nkv++] = (drape_kv){r.f[i].key, r.f[i].text, r.f[i].value};
+        fabric_text = slurp_text(s.fabric_path);
+        scene_text = slurp_text(scene_path);
+        drape_h5_final fin = {res.t_end_s, res.x, res.v, kv, nkv, fabric_text, scene_text};
+        drape_h5 *h = rc.h5;
+        rc.h5 = NULL;
+        if (drape_h5_close(h, &fin, &err) != 0) goto fail;
+    }
+    if (csv) print_csv(stdout, &r);
+    else print_json(stdout, &r);
+    if (fflush(stdout) != 0) {
+        drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");
+        goto fail;
+    }
+    goto out;
+fail:
+    drape_cli_print_error(&err);
+    status = drape_error_exit_status(err.kind);
+out:
+    drape_obj_free(rc.obj);
+    drape_h5_discard(rc.h5);
+    drape_dc_free(dc);
+    drape_sim_result_free(&res);
+    drape_model_free(m);
+    drape_lattice_free(L);
+    drape_free(fabric_text);
+    drape_free(scene_text);
+    return status;
+}

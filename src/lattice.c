@@ -1,0 +1,736 @@
+/* lattice.c: the particle lattice of a specimen (MODEL.md sections 2, 3, 5).
+ *
+ * What it builds (see lattice.h for the world placement and docs/lattice.md
+ * for the full description):
+ *
+ *   - the grid: one particle per lattice point (i, j) at spacing sigma that
+ *     lies in the specimen (rectangle, circle centred on a lattice point,
+ *     strip with a particle exactly on the platform edge x = 0);
+ *   - lumped masses (MODEL 2):  m_p = W * (A(C_p & S) + lumped),       (L1)
+ *     C_p the sigma x sigma cell centred on p, S the specimen, and
+ *     "lumped" the area A(C_q & S) of every lattice point q that is not a
+ *     particle, given in equal shares to the particle(s) nearest to q.  The
+ *     cells of all lattice points tile the plane, so sum m_p = W * A(S)
+ *     up to rounding;
+ *   - element weights (MODEL 3), each the fraction of a full element's area
+ *     that lies inside the specimen:
+ *       edge   w_e = A(R_e & S) / sigma^2,  R_e: sigma (along) x sigma
+ *              (across) rectangle centred on the edge's midpoint;     (L2)
+ *       hinge  w_h = A(C_mid & S) / sigma^2 * lambda, length lambda = 1/2
+ *              for the along-strip hinge at the last clamped particle of a
+ *              cantilever, 1 otherwise (MODEL 5): that hinge stands for
+ *              [0, sigma/2] only, so its area and the length its turning
+ *              angle is spread over are both halved; the model uses
+ *              K = psi / (lambda sigma).  Halving the weight alone (K still
+ *              psi / sigma) makes the spring softer instead of stiffer and
+ *              the tip drop first-order wrong (docs/lattice.md);     (L3)
+ *       corner w_c = A(Q_c & S) / (sigma^2 / 4), Q_c the sigma/2 x sigma/2
+ *              quarter cell between mid and its two neighbours;       (L4)
+ *   - the fixed set (clamps of each scene kind, pins) and free numbering;
+ *   - the optional perturbation z += a * U(-1, 1) of free particles, from
+ *     splitmix64 (Steele, Lea & Flood 2014, "Fast splittable pseudorandom
+ *     number generators", OOPSLA; constants as in Vigna's public-domain
+ *     splitmix64.c) seeded with the scene's seed, u = (z >> 11) * 2^-53.
+ *
+ * Geometry is done in grid-index units (sigma = 1): the cell of (i, j) is
+ * [i - 1/2, i + 1/2] x [j - 1/2, j + 1/2] and the specimen is an axis-aligned
+ * rectangle or a disc in the same units, so every area above is either a
+ * product of interval overlaps (exact) or a disc-rectangle intersection
+ * computed in closed form (disc_rect_area below).
+ */
+#include "drape/lattice.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "drape/alloc.h"
+
+/* Snap tolerance (relative, in grid-index units): a dimension within 1e-9
+ * spacings of a multiple of sigma counts as that multiple, and a point
+ * within 1e-9 (relative) of a specimen/clamp boundary counts as on it.
+ * Protects the counts against rounding of inputs like 0.3 / 0.01. */
+static const double SNAP = 1e-9;
+
+/* Largest grid (bounding box, points) accepted: every id, and 4x the
+ * particle count (corners), must fit an int, with margin. */
+static const long MAX_GRID_POINTS = INT_MAX / 8;
+
+/* Part of the clamp hinge's vertex interval [-sigma/2, sigma/2] that
+ * overhangs the platform edge x = 0 (MODEL 5). */
+static const double CLAMP_HINGE_FRACTION = 0.5;
+
+/* Geometry of a scene in grid-index units. */
+typedef struct geom {
+    int ni, nj;
+    int disc;             /* 1: specimen is the disc |(i,j) - (ci,cj)| <= r */
+    double r;             /* disc radius, index units */
+    double lo[2], hi[2];  /* rectangle specimen, index units ([0]: i) */
+    double ci, cj;        /* grid index of the world origin */
+    int swap;             /* 1 (warp strip): x = (j - cj) s, y = -(i - ci) s */
+} geom;
+
+/* ---- areas ----------------------------------------------------------- */
+
+/* P(x) = integral_0^x sqrt(r^2 - t^2) dt = (x sqrt(r^2 - x^2)
+ * + r^2 asin(x / r)) / 2 for 0 <= x <= r. */
+static double circ_prim(double x, double r)
+{
+    double q = x / r;
+    if (q > 1.0) q = 1.0;
+    return 0.5 * (x * sqrt(fmax(r * r - x * x, 0.0)) + r * r * asin(q));
+}
+
+/* g(a, b) = area of {0 <= X <= a, 0 <= Y <= b, X^2 + Y^2 <= r^2}, a, b >= 0.
+ * Derivation: clip a, b to r (the disc ends there).  If the corner (a, b)
+ * is inside the disc the whole rectangle is: g = a b.  Otherwise the arc
+ * Y = sqrt(r^2 - X^2) crosses Y = b at X = xc = sqrt(r^2 - b^2) < a, and
+ *   g = int_0^a min(b, sqrt(r^2 - X^2)) dX = b xc + P(a) - P(xc). */
+static double quad_area(double a, double b, double r)
+{
+    if (a > r) a = r;
+    if (b > r) b = r;
+    if (a * a + b * b <= r * r) return a * b;
+    double xc = sqrt(fmax(r * r - b * b, 0.0));
+    return b * xc + circ_prim(a, r) - circ_prim(xc, r);
+}
+
+/* G(x, y) = oriented integral_0^x integral_0^y 1_disc dY dX.  The disc is
+ * symmetric in X and Y, so G(x, y) = sgn(x) sgn(y) g(|x|, |y|). */
+static double quad_signed(double x, double y, double r)
+{
+    double v = quad_area(fabs(x), fabs(y), r);
+    return ((x < 0) != (y < 0)) ? -v : v;
+}
+
+/* Area of [x0, x1] x [y0, y1] inside the disc of radius r centred at the
+ * origin (x0 <= x1, y0 <= y1): inclusion-exclusion on G,
+ *   A = G(x1, y1) - G(x0, y1) - G(x1, y0) + G(x0, y0). */
+static double disc_rect_area(double x0, double x1, double y0, double y1,
+                             double r)
+{
+    double a = quad_signed(x1, y1, r) - quad_signed(x0, y1, r)
+             - quad_signed(x1, y0, r) + quad_signed(x0, y0, r);
+    double full = (x1 - x0) * (y1 - y0);
+    if (a < 0.0) a = 0.0;
+    if (a > full) a = full;
+    return a;
+}
+
+static double overlap(double a0, double a1, double b0, double b1)
+{
+    double lo = a0 > b0 ? a0 : b0, hi = a1 < b1 ? a1 : b1;
+    return hi > lo ? hi - lo : 0.0;
+}
+
+/* Area (index units) of the rectangle spanned by (x0, y0), (x1, y1) (any
+ * order) inside the specimen. */
+static double spec_area(const geom *g, double x0, double x1, double y0,
+                        double y1)
+{
+    double t;
+    if (x0 > x1) { t = x0; x0 = x1; x1 = t; }
+    if (y0 > y1) { t = y0; y0 = y1; y1 = t; }
+    if (g->disc)
+        return disc_rect_area(x0 - g->ci, x1 - g->ci, y0 - g->cj, y1 - g->cj,
+                              g->r);
+    return overlap(x0, x1, g->lo[0], g->hi[0])
+         * overlap(y0, y1, g->lo[1], g->hi[1]);
+}
+
+static double cell_area(const geom *g, int i, int j)
+{
+    return spec_area(g, i - 0.5, i + 0.5, j - 0.5, j + 0.5);
+}
+
+/* Weight in (0, 1]: a fraction of a full area. */
+static double frac(double area, double full)
+{
+    double w = area / full;
+    return w > 1.0 ? 1.0 : w;
+}
+
+/* ---- geometry ---------------------------------------------------------- */
+
+/* Number of lattice points on a side of length `len` (metres): the lattice
+ * covers floor(len / s) spacings.  -1 if absurd. */
+static long side_points(double len, double s)
+{
+    double v = len / s;
+    if (!isfinite(v) || v < 0.0 || v > (double)MAX_GRID_POINTS) return -1;
+    return (long)floor(v + SNAP) + 1;
+}
+
+static int is_kept(const geom *g, int i, int j)
+{
+    if (i < 0 || j < 0 || i >= g->ni || j >= g->nj) return 0;
+    if (!g->disc) return 1;
+    double di = i - g->ci, dj = j - g->cj, rr = g->r * (1.0 + SNAP);
+    return di * di + dj * dj <= rr * rr;
+}
+
+static int pos_ok(double v) { return isfinite(v) && v > 0.0; }
+
+/* Fill g from the scene.  Returns 0; -1 for invalid input (E_INPUT);
+ * -2 for a lattice too large (E_NOMEM).  err may be NULL.  No allocation. */
+static int geom_init(const drape_scene *s, geom *g, drape_error *err)
+{
+    const char *file = s->path;
+    double sp = s->spacing;
+    long ni = 0, nj = 0;
+
+    memset(g, 0, sizeof *g);
+    if (!pos_ok(sp))
+        return drape_error_set(err, DRAPE_E_INPUT, file, 0, 0, "spacing",
+                               "lattice spacing must be positive, got %g", sp);
+    switch (s->shape) {
+    case DRAPE_SHAPE_RECTANGLE:
+        if (!pos_ok(s->width) || !pos_ok(s->height))
+            return drape_error_set(err, DRAPE_E_INPUT, file, 0, 0, "specimen",
+                                   "rectangle needs positive width and height");
+        ni = side_points(s->width, sp);
+        nj = side_points(s->height, sp);
+        if (ni < 0 || nj < 0) break;
+        g->ci = 0.5 * (double)(ni - 1);
+        g->cj = 0.5 * (double)(nj - 1);
+        g->lo[0] = g->ci - 0.5 * s->width / sp;
+        g->hi[0] = g->ci + 0.5 * s->width / sp;
+        g->lo[1] = g->cj - 0.5 * s->height / sp;
+        g->hi[1] = g->cj + 0.5 * s->height / sp;
+        break;
+    case DRAPE_SHAPE_CIRCLE: {
+        if (!pos_ok(s->diameter))
+            return drape_error_set(err, DRAPE_E_INPUT, file, 0, 0,
+                                   "specimen.diameter",
+                                   "circle needs a positive diameter");
+        long m = side_points(0.5 * s->diameter, sp);
+        if (m < 0) break;
+        m -= 1;
+        ni = nj = 2 * m + 1;
+        g->disc = 1;
+        g->r = 0.5 * s->diameter / sp;
+        g->ci = g->cj = (double)m;
+        break;
+    }
+    case DRAPE_SHAPE_STRIP: {
+        double len = s->length, ov = s->overhang;
+        if (!pos_ok(len) || !pos_ok(s->width))
+            return drape_error_set(err, DRAPE_E_INPUT, file, 0, 0, "specimen",
+                                   "strip needs positive length and width");
+        if (!isfinite(ov) || ov < 0.0 || ov > len * (1.0 + SNAP))
+            return drape_error_set(err, DRAPE_E_INPUT, file, 0, 0, "overhang",
+                                   "overhang %g m outside [0, length %g m]",
+                                   ov, len);
+        double back = len - ov; /* clamped length, x in [-back, 0] */
+        if (back < 0.0) back = 0.0;
+        long nb = side_points(back, sp) - 1;  /* points at x < 0 */
+        long nf = side_points(ov, sp) - 1;    /* points at x > 0 */
+        long nw = side_points(s->width, sp);
+        if (nb < 0 || nf < 0 || nw < 0) { ni = -1; break; }
+        long nlen = nb + nf + 1;
+        double c_len = (double)nb, c_w = 0.5 * (double)(nw - 1);
+        double lo_len = c_len - back / sp, hi_len = c_len + ov / sp;
+        double lo_w = c_w - 0.5 * s->width / sp, hi_w = c_w + 0.5 * s->width / sp;
+        if (s->strip_dir == DRAPE_WARP) { /* j along +x, i along -y */
+            g->swap = 1;
+            ni = nw; nj = nlen;
+            g->ci = c_w; g->cj = c_len;
+            g->lo[0] = lo_w; g->hi[0] = hi_w;
+            g->lo[1] = lo_len; g->hi[1] = hi_len;
+        } else {                          /* i along +x, j along +y */
+            ni = nlen; nj = nw;
+            g->ci = c_len; g->cj = c_w;
+            g->lo[0] = lo_len; g->hi[0] = hi_len;
+            g->lo[1] = lo_w; g->hi[1] = hi_w;
+        }
+        break;
+    }
+    default:
+        return drape_error_set(err, DRAPE_E_INPUT, file, 0, 0, "specimen.shape",
+                               "unknown specimen shape %d", (int)s->shape);
+    }
+    if (ni < 1 || nj < 1 || ni > MAX_GRID_POINTS / nj) {
+        drape_error_set(err, DRAPE_E_NOMEM, file, 0, 0, "spacing",
+                        "lattice too large for spacing %g m (more than %ld "
+                        "grid points)", sp, MAX_GRID_POINTS);
+        return -2;
+    }
+    g->ni = (int)ni;
+    g->nj = (int)nj;
+    return 0;
+}
+
+/* ---- construction ------------------------------------------------------ */
+
+static int grid_at(const drape_lattice *L, int i, int j)
+{
+    if (i < 0 || j < 0 || i >= L->ni || j >= L->nj) return -1;
+    return L->grid[(size_t)j * (size_t)L->ni + (size_t)i];
+}
+
+/* Masses (L1).  Every lattice point q of the grid grown by one ring (cells
+ * beyond it cannot meet the specimen: the kept points reach to within one
+ * spacing of its boundary) contributes W * A(C_q & S): to itself if kept,
+ * else in equal shares to the kept particle(s) nearest to q (ties split;
+ * searched among the 8 neighbours, which are nearer than any other point,
+ * else over all particles). */
+static void lump_masses(drape_lattice *L, const geom *g, double W)
+{
+    double s2 = L->sigma * L->sigma;
+    for (int j = -1; j <= L->nj; j++) {
+        for (int i = -1; i <= L->ni; i++) {
+            double a = cell_area(g, i, j);
+            if (a <= 0.0) continue;
+            int p = grid_at(L, i, j);
+            if (p >= 0) { L->mass[p] += W * a * s2; continue; }
+            int best = INT_MAX, cnt = 0;
+            for (int pass = 0; pass < 2; pass++) {
+                for (int dj = -1; dj <= 1; dj++)
+                    for (int di = -1; di <= 1; di++) {
+                        int q = grid_at(L, i + di, j + dj);
+                        if (q < 0 || (di == 0 && dj == 0)) continue;
+                        int d2 = di * di + dj * dj;
+                        if (pass == 0 && d2 < best) best = d2;
+                        if (pass == 1 && d2 == best) cnt++;
+                    }
+            }
+            if (cnt > 0) {
+                for (int dj = -1; dj <= 1; dj++)
+                    for (int di = -1; di <= 1; di++) {
+                        int q = grid_at(L, i + di, j + dj);
+                        if (q < 0 || (di == 0 && dj == 0)) continue;
+                        if (di * di + dj * dj == best)
+                            L->mass[q] += W * a * s2 / cnt;
+                    }
+                continue;
+            }
+            /* no neighbour kept (only with sigma comparable to the
+             * specimen): brute-force nearest particles */
+            long bestl = LONG_MAX;
+            for (int q = 0; q < L->n; q++) {
+                long di = L->gi[q] - i, dj = L->gj[q] - j;
+                long d2 = di * di + dj * dj;
+                if (d2 < bestl) { bestl = d2; cnt = 1; }
+                else if (d2 == bestl) cnt++;
+            }
+            for (int q = 0; q < L->n; q++) {
+                long di = L->gi[q] - i, dj = L->gj[q] - j;
+                if (di * di + dj * dj == bestl) L->mass[q] += W * a * s2 / cnt;
+            }
+        }
+    }
+}
+
+/* Clamps of the scene kind (world coordinates). */
+static int clamped_by_kind(const drape_scene *s, const double *x)
+{
+    double sp = s->spacing;
+    switch (s->kind) {
+    case DRAPE_SCENE_CUSICK: {
+        double r = 0.5 * s->support_diameter * (1.0 + SNAP);
+        return x[0] * x[0] + x[1] * x[1] <= r * r;
+    }
+    case DRAPE_SCENE_TABLE: {
+        double h = 0.5 * s->table_size * (1.0 + SNAP);
+        if (s->table_shape == DRAPE_TABLE_ROUND)
+            return x[0] * x[0] + x[1] * x[1] <= h * h;
+        return fabs(x[0]) <= h && fabs(x[1]) <= h;
+    }
+    case DRAPE_SCENE_CANTILEVER:
+        return x[0] <= SNAP * sp;
+    case DRAPE_SCENE_HANG:
+    default:
+        return 0;
+    }
+}
+
+/* Pins: (i, j) with negative values counting from the end. */
+static int apply_pins(drape_lattice *L, const drape_scene *s,
+                      drape_error *err)
+{
+    for (int k = 0; k < s->n_pins && k < DRAPE_SCENE_MAX_PINS; k++) {
+        int i = s->pins[k][0], j = s->pins[k][1];
+        int ii = i < 0 ? L->ni + i : i, jj = j < 0 ? L->nj + j : j;
+        char key[32];
+        snprintf(key, sizeof key, "pins[%d]", k);
+        if (ii < 0 || jj < 0 || ii >= L->ni || jj >= L->nj)
+            return drape_error_set(err, DRAPE_E_INPUT, s->path, 0, 0, key,
+                                   "pin (%d, %d) is outside the %d x %d "
+                                   "lattice (i in [-%d, %d], j in [-%d, %d])",
+                                   i, j, L->ni, L->nj, L->ni, L->ni - 1,
+                                   L->nj, L->nj - 1);
+        int p = grid_at(L, ii, jj);
+        if (p < 0)
+            return drape_error_set(err, DRAPE_E_INPUT, s->path, 0, 0, key,
+                                   "pin (%d, %d) is a lattice point outside "
+                                   "the specimen", i, j);
+        L->fixed[p] = 1;
+    }
+    return 0;
+}
+
+static uint64_t splitmix64(uint64_t *state)
+{
+    uint64_t z = (*state += UINT64_C(0x9e3779b97f4a7c15));
+    z = (z ^ (z >> 30)) * UINT64_C(0xbf58476d1ce4e5b9);
+    z = (z ^ (z >> 27)) * UINT64_C(0x94d049bb133111eb);
+    return z ^ (z >> 31);
+}
+
+/* U(-1, 1) (precisely [-1, 1)) from the top 53 bits. */
+static double uniform_pm1(uint64_t *state)
+{
+    double u = (double)(splitmix64(state) >> 11) * (1.0 / 9007199254740992.0);
+    return 2.0 * u - 1.0;
+}
+
+/* Elements (L2-L4).  With fill = 0 only counts; with fill = 1 stores into
+ * the arrays (already sized by the counting pass). */
+static void build_elements(drape_lattice *L, const geom *g,
+                           const drape_scene *s, int fill)
+{
+    int want_edges = (s->terms & DRAPE_TERM_STRETCH) || s->damping_edge > 0.0;
+    int want_hinges = (s->terms & DRAPE_TERM_BEND) != 0;
+    int want_corners = (s->terms & DRAPE_TERM_SHEAR) != 0;
+    int ne = 0, nh = 0, nc = 0;
+    /* direction d: DRAPE_WEFT steps i, DRAPE_WARP steps j */
+    static const int step[2][2] = {{1, 0}, {0, 1}};
+    static const int quad[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
+
+    for (int p = 0; p < L->n; p++) {
+        int i = L->gi[p], j = L->gj[p];
+        for (int d = 0; d < 2 && want_edges; d++) {
+            int q = grid_at(L, i + step[d][0], j + step[d][1]);
+            if (q < 0 || (L->fixed[p] && L->fixed[q])) continue;
+            if (fill) {
+                drape_edge *e = &L->edges[ne];
+                e->a = p; e->b = q; e->dir = (drape_dir)d;
+                /* sigma along the edge, sigma across, centred on its middle */
+                double mi = i + 0.5 * step[d][0], mj = j + 0.5 * step[d][1];
+                e->weight = frac(spec_area(g, mi - 0.5, mi + 0.5,
+                                           mj - 0.5, mj + 0.5), 1.0);
+            }
+            ne++;
+        }
+        for (int d = 0; d < 2 && want_hinges; d++) {
+            int a = grid_at(L, i - step[d][0], j - step[d][1]);
+            int b = grid_at(L, i + step[d][0], j + step[d][1]);
+            if (a < 0 || b < 0) continue;
+            int nfix = L->fixed[a] + L->fixed[p] + L->fixed[b];
+            if (nfix == 3) continue;
+            if (fill) {
+                drape_hinge *h = &L->hinges[nh];
+                h->prev = a; h->mid = p; h->next = b; h->dir = (drape_dir)d;
+                h->weight = frac(cell_area(g, i, j), 1.0);
+                h->length = 1.0;
+                /* cantilever clamp (MODEL 5, L3): the hinge at the last
+                 * clamped particle, along the strip, stands for its
+                 * overhanging half [0, sigma/2] only: half the area, and
+                 * its turning psi is spread over sigma/2 (K = 2 psi/sigma) */
+                if (s->kind == DRAPE_SCENE_CANTILEVER && L->fixed[p]
+                    && L->fixed[a] != L->fixed[b]
+                    && fabs(L->x0[3 * a] - L->x0[3 * b]) > L->sigma) {
+                    h->weight *= CLAMP_HINGE_FRACTION;
+                    h->length = CLAMP_HINGE_FRACTION;
+                }
+            }
+            nh++;
+        }
+        for (int c = 0; c < 4 && want_corners; c++) {
+            int wf = grid_at(L, i + quad[c][0], j);
+            int wp = grid_at(L, i, j + quad[c][1]);
+            if (wf < 0 || wp < 0) continue;
+            if (L->fixed[p] && L->fixed[wf] && L->fixed[wp]) continue;
+            if (fill) {
+                drape_corner *k = &L->corners[nc];
+                k->mid = p; k->warp = wp; k->weft = wf;
+                k->weight = frac(spec_area(g, i, i + 0.5 * quad[c][0],
+                                           j, j + 0.5 * quad[c][1]), 0.25);
+            }
+            nc++;
+        }
+    }
+    L->n_edges = ne;
+    L->n_hinges = nh;
+    L->n_corners = nc;
+}
+
+static double nominal_area(const drape_scene *s)
+{
+    switch (s->shape) {
+    case DRAPE_SHAPE_RECTANGLE: return s->width * s->height;
+    case DRAPE_SHAPE_CIRCLE:
+        return 0.25 * 3.14159265358979323846 * s->diameter * s->diameter;
+    case DRAPE_SHAPE_STRIP: return s->length * s->width;
+    default: return 0.0;
+    }
+}
+
+drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
+                                 drape_error *err)
+{
+    drape_lattice *L = NULL;
+    geom g;
+    int rc = -1;
+
+    if (!s || !f) {
+        drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                        "drape_lattice_new: NULL scene or fabric");
+        return NULL;
+    }
+    if (geom_init(s, &g, err) != 0) return NULL;
+
+    L = drape_calloc(1, sizeof *L);
+    if (!L) goto nomem;
+    L->sigma = s->spacing;
+    L->ni = g.ni;
+    L->nj = g.nj;
+    size_t ngrid = (size_t)g.ni * (size_t)g.nj;
+    L->grid = drape_calloc(ngrid, sizeof *L->grid);
+    if (!L->grid) goto nomem;
+    int n = 0;
+    for (int j = 0; j < g.nj; j++)
+        for (int i = 0; i < g.ni; i++)
+            L->grid[(size_t)j * g.ni + i] = is_kept(&g, i, j) ? n++ : -1;
+    L->n = n;
+
+    size_t un = (size_t)n;
+    L->gi = drape_calloc(un, sizeof *L->gi);
+    L->gj = drape_calloc(un, sizeof *L->gj);
+    L->x0 = drape_calloc(3 * un, sizeof *L->x0);
+    L->xinit = drape_calloc(3 * un, sizeof *L->xinit);
+    L->mass = drape_calloc(un, sizeof *L->mass);
+    L->fixed = drape_calloc(un, sizeof *L->fixed);
+    L->free_id = drape_calloc(un, sizeof *L->free_id);
+    if (!L->gi || !L->gj || !L->x0 || !L->xinit || !L->mass || !L->fixed
+        || !L->free_id)
+        goto nomem;
+
+    /* positions and kind clamps */
+    for (int j = 0; j < g.nj; j++) {
+        for (int i = 0; i < g.ni; i++) {
+            int p = grid_at(L, i, j);
+            if (p < 0) continue;
+            double *x = L->x0 + 3 * p;
+            L->gi[p] = i;
+            L->gj[p] = j;
+            if (g.swap) {
+                x[0] = (j - g.cj) * L->sigma;
+                x[1] = -(i - g.ci) * L->sigma;
+            } else {
+                x[0] = (i - g.ci) * L->sigma;
+                x[1] = (j - g.cj) * L->sigma;
+            }
+            x[2] = 0.0;
+            L->fixed[p] = (unsigned char)clamped_by_kind(s, x);
+        }
+    }
+    if (apply_pins(L, s, err) != 0) goto out;
+
+    lump_masses(L, &g, f->weight);
+    L->mass_total = 0.0;
+    for (int p = 0; p < n; p++) L->mass_total += L->mass[p];
+    L->area_nominal = nominal_area(s);
+
+    /* free numbering */
+    L->n_free = 0;
+    for (int p = 0; p < n; p++)
+        L->free_id[p] = L->fixed[p] ? -1 : L->n_free++;
+    L->free_to_id = drape_calloc((size_t)L->n_free, sizeof *L->free_to_id);
+    if (!L->free_to_id) goto nomem;
+    for (int p = 0; p < n; p++)
+        if (L->free_id[p] >= 0) L->free_to_id[L->free_id[p]] = p;
+
+    /* initial state: rest + perturbation of free particles, in id order */
+    memcpy(L->xinit, L->x0, 3 * un * sizeof *L->x0);
+    if (s->has_perturbation) {
+        uint64_t state = (uint64_t)s->perturb_seed;
+        for (int p = 0; p < n; p++)
+            if (!L->fixed[p])
+                L->xinit[3 * p + 2] += s->perturb_amplitude
+                                       * uniform_pm1(&state);
+    }
+
+    /* elements: count, allocate, fill */
+    build_elements(L, &g, s, 0);
+    if (L->n_edges > 0) {
+        L->edges = drape_calloc((size_t)L->n_edges, sizeof *L->edges);
+        if (!L->edges) goto nomem;
+    }
+    if (L->n_hinges > 0) {
+        L->hinges = drape_calloc((size_t)L->n_hinges, sizeof *L->hinges);
+        if (!L->hinges) goto nomem;
+    }
+    if (L->n_corners > 0) {
+        L->corners = drape_calloc((size_t)L->n_corners, sizeof *L->corners);
+        if (!L->corners) goto nomem;
+    }
+    build_elements(L, &g, s, 1);
+    rc = 0;
+    goto out;
+
+nomem:
+    drape_error_set(err, DRAPE_E_NOMEM, s->path, 0, 0, NULL,
+                    "out of memory building the lattice");
+out:
+    if (rc != 0) {
+        drape_lattice_free(L);
+        L = NULL;
+    }
+    return L;
+}
+
+void drape_lattice_free(drape_lattice *L)
+{
+    if (!L) return;
+    drape_free(L->grid);
+    drape_free(L->gi);
+    drape_free(L->gj);
+    drape_free(L->x0);
+    drape_free(L->xinit);
+    drape_free(L->mass);
+    drape_free(L->fixed);
+    drape_free(L->free_id);
+    drape_free(L->free_to_id);
+    drape_free(L->edges);
+    drape_free(L->hinges);
+    drape_free(L->corners);
+    drape_free(L);
+}
+
+int drape_lattice_estimate(const drape_scene *s, long *ni, long *nj,
+                           long *n_particles)
+{
+    geom g;
+    if (!s || geom_init(s, &g, NULL) != 0) return -1;
+    long n = 0;
+    if (g.disc) {
+        for (int j = 0; j < g.nj; j++)
+            for (int i = 0; i < g.ni; i++) n += is_kept(&g, i, j);
+    } else {
+        n = (long)g.ni * g.nj;
+    }
+    if (ni) *ni = g.ni;
+    if (nj) *nj = g.nj;
+    if (n_particles) *n_particles = n;
+    return 0;
+}
+
+/* ---- invariants -------------------------------------------------------- */
+
+static int bad_id(const drape_lattice *L, int p) { return p < 0 || p >= L->n; }
+
+static int bad_weight(double w) { return !(w > 0.0 && w <= 1.0); }
+
+/* 1 unless q is the neighbour of p at step (di, dj) in the grid and at
+ * distance sigma in the rest state. */
+static int bad_neighbour(const drape_lattice *L, int p, int q, int di, int dj)
+{
+    if (bad_id(L, p) || bad_id(L, q)) return 1;
+    if (L->gi[q] - L->gi[p] != di || L->gj[q] - L->gj[p] != dj) return 1;
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double d = L->x0[3 * q + k] - L->x0[3 * p + k];
+        d2 += d * d;
+    }
+    return fabs(sqrt(d2) - L->sigma) > 1e-9 * L->sigma;
+}
+
+int drape_lattice_check(const drape_lattice *L)
+{
+    int bad = 0;
+    if (!L) return 1;
+    if (!(L->sigma > 0.0) || L->ni < 1 || L->nj < 1 || L->n < 1) return 1;
+    if (!L->grid || !L->gi || !L->gj || !L->x0 || !L->xinit || !L->mass
+        || !L->fixed || !L->free_id || (L->n_free > 0 && !L->free_to_id))
+        return 1;
+
+    /* grid <-> particles */
+    int count = 0;
+    for (long k = 0; k < (long)L->ni * L->nj; k++) {
+        int p = L->grid[k];
+        if (p < -1 || p >= L->n) bad++;
+        else if (p >= 0) {
+            count++;
+            if ((long)L->gj[p] * L->ni + L->gi[p] != k) bad++;
+        }
+    }
+    if (count != L->n) bad++;
+
+    /* per particle */
+    int nfree = 0;
+    double msum = 0.0;
+    for (int p = 0; p < L->n; p++) {
+        if (L->gi[p] < 0 || L->gi[p] >= L->ni || L->gj[p] < 0
+            || L->gj[p] >= L->nj)
+            bad++;
+        if (!(L->mass[p] > 0.0) || !isfinite(L->mass[p])) bad++;
+        msum += L->mass[p];
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(L->x0[3 * p + k]) || !isfinite(L->xinit[3 * p + k]))
+                bad++;
+        if (L->x0[3 * p + 2] != 0.0) bad++;
+        if (L->fixed[p] > 1) bad++;
+        if (L->fixed[p]) {
+            if (L->free_id[p] != -1) bad++;
+            for (int k = 0; k < 3; k++)
+                if (L->xinit[3 * p + k] != L->x0[3 * p + k]) bad++;
+        } else {
+            int f = L->free_id[p];
+            if (f != nfree || f >= L->n_free || L->free_to_id[f] != p) bad++;
+            nfree++;
+            if (L->xinit[3 * p] != L->x0[3 * p]
+                || L->xinit[3 * p + 1] != L->x0[3 * p + 1])
+                bad++;
+        }
+    }
+    if (nfree != L->n_free) bad++;
+    if (fabs(msum - L->mass_total) > 1e-12 * fabs(msum)) bad++;
+
+    /* elements */
+    if (L->n_edges < 0 || L->n_hinges < 0 || L->n_corners < 0) return bad + 1;
+    if ((L->n_edges && !L->edges) || (L->n_hinges && !L->hinges)
+        || (L->n_corners && !L->corners))
+        return bad + 1;
+    for (int e = 0; e < L->n_edges; e++) {
+        const drape_edge *E = &L->edges[e];
+        int d = E->dir == DRAPE_WARP;
+        if (E->a >= E->b) bad++;
+        if (bad_neighbour(L, E->a, E->b, !d, d)) { bad++; continue; }
+        if (bad_weight(E->weight)) bad++;
+        if (L->fixed[E->a] && L->fixed[E->b]) bad++;
+    }
+    for (int h = 0; h < L->n_hinges; h++) {
+        const drape_hinge *H = &L->hinges[h];
+        int d = H->dir == DRAPE_WARP;
+        if (bad_neighbour(L, H->prev, H->mid, !d, d)
+            || bad_neighbour(L, H->mid, H->next, !d, d)) {
+            bad++;
+            continue;
+        }
+        /* length 0 stands for 1 (lattice.h) */
+        if (bad_weight(H->weight) || (H->length != 0.0 && bad_weight(H->length)))
+            bad++;
+        if (L->fixed[H->prev] && L->fixed[H->mid] && L->fixed[H->next]) bad++;
+    }
+    for (int c = 0; c < L->n_corners; c++) {
+        const drape_corner *C = &L->corners[c];
+        if (bad_id(L, C->mid) || bad_id(L, C->warp) || bad_id(L, C->weft)) {
+            bad++;
+            continue;
+        }
+        int dj = L->gj[C->warp] - L->gj[C->mid];
+        int di = L->gi[C->weft] - L->gi[C->mid];
+        if ((dj != 1 && dj != -1) || (di != 1 && di != -1)
+            || bad_neighbour(L, C->mid, C->warp, 0, dj)
+            || bad_neighbour(L, C->mid, C->weft, di, 0)) {
+            bad++;
+            continue;
+        }
+        if (bad_weight(C->weight)) bad++;
+        if (L->fixed[C->mid] && L->fixed[C->warp] && L->fixed[C->weft]) bad++;
+    }
+    return bad;
+}

@@ -1,0 +1,277 @@
+/* sim.c: the driver loop (sim.h): time, output points, end conditions,
+ * statistics.
+ *
+ * End conditions (MODEL.md 6): t >= t_max, or equilibrium: the largest
+ * particle speed max_i |v_i| stays below eq_speed at every check over a span
+ * of eq_window; checks are eq_window / DRAPE_SIM_EQ_CHECKS_PER_WINDOW apart
+ * and read the integrator's dense output, so they never force small steps.
+ * Energies reported at the end: E_kin = 1/2 sum m_i |v_i|^2 (MODEL 4) and
+ * the potential terms of drape_model_energy (MODEL 3).
+ */
+#include "drape/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "drape/alloc.h"
+
+/* Two output times closer than this fraction of the larger are the same
+ * point (frame and check grids computed as k * step). */
+#define SIM_TIME_FUZZ 1e-9
+
+const char *drape_sim_status_name(drape_sim_status s)
+{
+    switch (s) {
+    case DRAPE_SIM_EQUILIBRIUM: return "equilibrium";
+    case DRAPE_SIM_T_MAX: return "t_max";
+    case DRAPE_SIM_FAILED: return "failed";
+    }
+    return "failed";
+}
+
+void drape_sim_opts_default(drape_sim_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    snprintf(o->integrator, sizeof o->integrator, "auto");
+    o->rtol = 1e-4;
+    o->atol = 1e-7;
+    o->t_max = 20.0;
+    o->eq_speed = 1e-4;
+    o->eq_window = 0.2;
+}
+
+void drape_sim_opts_from_scene(const drape_scene *s, drape_sim_opts *o)
+{
+    drape_sim_opts_default(o);
+    if (s->integrator[0]) snprintf(o->integrator, sizeof o->integrator, "%s", s->integrator);
+    o->rtol = s->rtol;
+    o->atol = s->atol;
+    o->t_max = s->t_max;
+    o->has_equilibrium = s->has_equilibrium;
+    if (s->has_equilibrium) {
+        o->eq_speed = s->eq_speed;
+        o->eq_window = s->eq_window;
+    }
+    o->frame_every = s->has_frames ? s->frame_every : 0.0;
+    o->max_order = s->max_order;
+}
+
+void drape_sim_result_free(drape_sim_result *r)
+{
+    if (!r) return;
+    drape_free(r->x);
+    drape_free(r->v);
+    r->x = r->v = NULL;
+}
+
+double drape_sim_kinetic_energy(const drape_lattice *L, const double *v)
+{
+    double e = 0.0;
+    for (int i = 0; i < L->n; i++) {
+        const double *q = v + 3 * i;
+        e += 0.5 * L->mass[i] * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+    }
+    return e;
+}
+
+double drape_sim_max_speed(const drape_lattice *L, const double *v)
+{
+    double s2 = 0.0;
+    for (int i = 0; i < L->n; i++) {
+        const double *q = v + 3 * i;
+        double a = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
+        if (a > s2) s2 = a;
+    }
+    return sqrt(s2);
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int all_finite(const double *a, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(a[i])) return 0;
+    return 1;
+}
+
+static int check_opts(const drape_sim_opts *o, drape_error *err)
+{
+    if (!(o->t_max > 0.0) || !isfinite(o->t_max))
+        return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "end.t_max",
+                               "must be a positive time, got %g s", o->t_max);
+    if (o->has_equilibrium && (!(o->eq_speed > 0.0) || !(o->eq_window > 0.0) ||
+                               !isfinite(o->eq_window)))
+        return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "end.equilibrium",
+                               "speed and window must be positive, got %g m/s, %g s",
+                               o->eq_speed, o->eq_window);
+    if (!(o->frame_every >= 0.0) || !isfinite(o->frame_every))
+        return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "output.frames.every",
+                               "must be a positive time, got %g s", o->frame_every);
+    return 0;
+}
+
+static int same_time(double a, double b)
+{
+    return fabs(a - b) <= SIM_TIME_FUZZ * fmax(fabs(a), fabs(b));
+}
+
+static int notify(drape_sim_observer obs, void *ctx, unsigned what, double t,
+                  const double *x, const double *v, long steps, double speed,
+                  drape_error *err)
+{
+    if (!obs) return 0;
+    drape_sim_event ev = {what, t, x, v, steps, speed};
+    if (obs(ctx, &ev, err) == 0) return 0;
+    drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                    "an observer stopped the run at t = %.9g s without a message", t);
+    return -1;
+}
+
+int drape_sim_run(drape_model *m, const drape_sim_opts *o,
+                  drape_sim_observer observer, void *ctx, drape_sim_result *r,
+                  drape_error *err)
+{
+    const drape_lattice *L = drape_model_lattice(m);
+    size_t n3 = 3 * (size_t)L->n;
+    drape_integrator *I = NULL;
+    double *x = NULL, *v = NULL;
+    int rc = -1;
+    double wall = 0.0, w0;
+    drape_integrator_stats st;
+
+    memset(r, 0, sizeof *r);
+    r->status = DRAPE_SIM_FAILED;
+    if (check_opts(o, err)) return -1;
+    r->x = drape_calloc(n3 ? n3 : 1, sizeof(double));
+    r->v = drape_calloc(n3 ? n3 : 1, sizeof(double));
+    x = drape_malloc(sizeof(double) * (n3 ? n3 : 1));
+    v = drape_malloc(sizeof(double) * (n3 ? n3 : 1));
+    if (!r->x || !r->v || !x || !v) {
+        drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+        goto out;
+    }
+    memcpy(r->x, L->xinit, sizeof(double) * n3);
+
+    drape_integrator_opts io;
+    drape_integrator_opts_default(&io);
+    io.rtol = o->rtol;
+    io.atol = o->atol;
+    io.t_stop = o->t_max;
+    io.max_order = o->max_order;
+    io.max_steps = o->max_steps;
+    w0 = now_s();
+    I = drape_integrator_new(m, o->integrator, &io, err);
+    wall += now_s() - w0;
+    if (!I) goto out;
+    snprintf(r->integrator, sizeof r->integrator, "%s", drape_integrator_name(I));
+
+    const int frames = o->frame_every > 0.0;
+    const int eq = o->has_equilibrium;
+    const double dt_check = eq ? o->eq_window / DRAPE_SIM_EQ_CHECKS_PER_WINDOW : 0.0;
+    long k_frame = 1, k_check = 1;
+    double t = 0.0, below_since = -1.0, speed;
+    unsigned last_what = 0;
+
+    drape_integrator_state(I, x, v);
+    speed = drape_sim_max_speed(L, v);
+    if (eq && speed < o->eq_speed) below_since = 0.0;
+    last_what = DRAPE_SIM_AT_START | (frames ? DRAPE_SIM_AT_FRAME : 0u);
+    if (frames) r->frames++;
+    if (notify(observer, ctx, last_what, 0.0, x, v, 0, speed, err)) goto out;
+    memcpy(r->x, x, sizeof(double) * n3);
+    memcpy(r->v, v, sizeof(double) * n3);
+
+    for (;;) {
+        double tf = frames ? (double)k_frame * o->frame_every : INFINITY;
+        double tc = eq ? (double)k_check * dt_check : INFINITY;
+        double t_next = fmin(o->t_max, fmin(tf, tc));
+        int is_frame = frames && same_time(tf, t_next);
+        int is_check = eq && same_time(tc, t_next);
+        int is_end = same_time(o->t_max, t_next);
+        if (is_end) t_next = o->t_max;
+
+        w0 = now_s();
+        int src = drape_integrator_step_to(I, t_next, DRAPE_STEP_NORMAL, err);
+        wall += now_s() - w0;
+        drape_integrator_state(I, x, v);
+        if (src) {
+            t = drape_integrator_time(I);
+            if (all_finite(x, n3) && all_finite(v, n3)) {
+                memcpy(r->x, x, sizeof(double) * n3);
+                memcpy(r->v, v, sizeof(double) * n3);
+            }
+            goto out;
+        }
+        if (!all_finite(x, n3) || !all_finite(v, n3)) {
+            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                            "%s produced a non-finite state by t = %.9g s; hint: "
+                            "tighten rtol or use an implicit integrator",
+                            drape_integrator_name(I), t_next);
+            goto out;
+        }
+        t = t_next;
+        memcpy(r->x, x, sizeof(double) * n3);
+        memcpy(r->v, v, sizeof(double) * n3);
+        speed = drape_sim_max_speed(L, v);
+        if (is_frame) k_frame++;
+        if (is_check) k_check++;
+
+        int settled = 0;
+        if (is_check) {
+            if (speed < o->eq_speed) {
+                if (below_since < 0.0) below_since = t;
+                if (t - below_since >= o->eq_window * (1.0 - SIM_TIME_FUZZ)) settled = 1;
+            } else {
+                below_since = -1.0;
+            }
+        }
+        if (settled || is_end) {
+            r->status = settled ? DRAPE_SIM_EQUILIBRIUM : DRAPE_SIM_T_MAX;
+            last_what = DRAPE_SIM_AT_END | (is_frame ? DRAPE_SIM_AT_FRAME : 0u);
+            break;
+        }
+        unsigned what = is_frame ? DRAPE_SIM_AT_FRAME
+                        : o->observe_progress ? DRAPE_SIM_AT_PROGRESS : 0u;
+        if (what) {
+            drape_integrator_get_stats(I, &st);
+            if (is_frame) r->frames++;
+            if (notify(observer, ctx, what, t, x, v, st.steps, speed, err)) goto out;
+        }
+    }
+
+    r->t_end_s = t;
+    drape_integrator_get_stats(I, &st);
+    if (last_what & DRAPE_SIM_AT_FRAME) r->frames++;
+    if (notify(observer, ctx, last_what, t, x, v, st.steps, speed, err)) {
+        r->status = DRAPE_SIM_FAILED;
+        goto out;
+    }
+    rc = 0;
+
+out:
+    if (rc != 0) {
+        r->status = DRAPE_SIM_FAILED;
+        r->t_end_s = I ? drape_integrator_time(I) : 0.0;
+    }
+    r->wall_s = wall;
+    if (I) {
+        drape_integrator_get_stats(I, &r->stats);
+    }
+    if (r->x && r->v) {
+        drape_model_energy(m, r->x, &r->energy);
+        r->kinetic_J = drape_sim_kinetic_energy(L, r->v);
+        r->max_strain = drape_model_max_strain(m, r->x);
+        r->max_speed = drape_sim_max_speed(L, r->v);
+    }
+    drape_integrator_free(I);
+    drape_free(x);
+    drape_free(v);
+    return rc;
+}

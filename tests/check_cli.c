@@ -1,0 +1,138 @@
+/* check_cli.c: the command line, end to end through the drape binary:
+ * help and version, exit statuses, every shipped fabric and scene accepted,
+ * the shared examples accepted unchanged, every file of the bad-input
+ * corpus (tests/bad) rejected with FILE:LINE:COL and a non-zero status. */
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#define CAP 65536
+static char out[CAP], err[CAP];
+
+START_TEST(test_help_version)
+{
+    ck_assert_int_eq(tu_run_drape("--help", out, CAP, err, CAP), 0);
+    ck_assert_ptr_nonnull(strstr(out, "Usage: drape"));
+    ck_assert_ptr_nonnull(strstr(out, "Exit status"));
+    ck_assert_int_eq(tu_run_drape("--version", out, CAP, err, CAP), 0);
+    ck_assert_ptr_nonnull(strstr(out, "drape "));
+    ck_assert_int_eq(tu_run_drape("check --help", out, CAP, err, CAP), 0);
+    ck_assert_int_eq(tu_run_drape("run --help", out, CAP, err, CAP), 0);
+    ck_assert_ptr_nonnull(strstr(out, "--spacing"));
+}
+END_TEST
+
+START_TEST(test_usage_errors)
+{
+    ck_assert_int_eq(tu_run_drape("", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("frobnicate", out, CAP, err, CAP), 2);
+    ck_assert_ptr_nonnull(strstr(err, "unknown command"));
+    ck_assert_int_eq(tu_run_drape("--bogus", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("check", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --spacing 5kg ../scenes/hang.yaml", out, CAP, err, CAP), 2);
+    ck_assert_ptr_nonnull(strstr(err, "--spacing"));
+    ck_assert_int_eq(tu_run_drape("run --integrator nope ../scenes/hang.yaml", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --energy-form odd ../scenes/hang.yaml", out, CAP, err, CAP), 2);
+}
+END_TEST
+
+/* Every file in a directory of the source tree passes `drape check`. */
+static void check_dir_valid(const char *dir)
+{
+    DIR *d = opendir(dir);
+    ck_assert_msg(d != NULL, "cannot open %s", dir);
+    struct dirent *e;
+    int n = 0;
+    while ((e = readdir(d)) != NULL) {
+        size_t len = strlen(e->d_name);
+        if (len < 6 || strcmp(e->d_name + len - 5, ".yaml") != 0) continue;
+        char args[1024];
+        snprintf(args, sizeof args, "check '%s/%s'", dir, e->d_name);
+        int st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st == 0, "drape %s: status %d, stderr: %s", args, st, err);
+        ck_assert_msg(strstr(out, "valid") != NULL, "%s: no summary", args);
+        n++;
+    }
+    closedir(d);
+    ck_assert_msg(n > 0, "no .yaml files in %s", dir);
+}
+
+START_TEST(test_shipped_files_valid)
+{
+    check_dir_valid("../fabrics");
+    check_dir_valid("../scenes");
+}
+END_TEST
+
+/* The shared examples are the input contract: accepted unchanged, and the
+ * copies in fabrics/ and scenes/ are identical to them. */
+START_TEST(test_shared_examples)
+{
+    const char *shared = getenv("DRAPE_SHARED");
+    if (!shared) shared = "../../shared/examples";
+    DIR *d = opendir(shared);
+    if (!d) {
+        fprintf(stderr, "note: %s not found; shared examples not checked\n", shared);
+        return;
+    }
+    closedir(d);
+    char args[1024];
+    snprintf(args, sizeof args, "check %s/fabrics/*.yaml %s/scenes/*.yaml", shared, shared);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "status %d: %s", st, err);
+    const char *names[] = {"fabrics/cotton-breen.yaml", "scenes/cusick.yaml", "scenes/hang.yaml",
+                           "scenes/table.yaml", "scenes/cantilever.yaml"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        snprintf(args, sizeof args, "cmp -s %s/%s ../%s", shared, names[i], names[i]);
+        ck_assert_msg(system(args) == 0, "%s differs from the shared example", names[i]);
+    }
+}
+END_TEST
+
+/* tests/bad: each file is rejected with a non-zero status and a GNU-style
+ * message naming the file and a line. */
+START_TEST(test_bad_corpus)
+{
+    DIR *d = opendir("bad");
+    ck_assert_msg(d != NULL, "tests/bad missing");
+    struct dirent *e;
+    int n = 0;
+    while ((e = readdir(d)) != NULL) {
+        size_t len = strlen(e->d_name);
+        if (len < 6 || strcmp(e->d_name + len - 5, ".yaml") != 0) continue;
+        char args[1024], prefix[600];
+        snprintf(args, sizeof args, "check 'bad/%s'", e->d_name);
+        int st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st != 0 && st != 2 && st < 64,
+                      "%s: status %d (want 1, 3 or 5), stderr: %s", e->d_name, st, err);
+        ck_assert_msg(strstr(out, "valid") == NULL, "%s: printed a summary", e->d_name);
+        /* the message names the bad file, or (for a scene whose fabric is bad)
+         * another file, always with a line number */
+        snprintf(prefix, sizeof prefix, "drape: ");
+        ck_assert_msg(strncmp(err, prefix, strlen(prefix)) == 0, "%s: %s", e->d_name, err);
+        const char *colon = strstr(err, ".yaml:");
+        ck_assert_msg(colon && colon[6] >= '1' && colon[6] <= '9',
+                      "%s: no FILE:LINE in: %s", e->d_name, err);
+        n++;
+    }
+    closedir(d);
+    ck_assert_msg(n >= 10, "only %d bad inputs", n);
+}
+END_TEST
+
+Suite *cli_suite(void)
+{
+    Suite *s = suite_create("cli");
+    TCase *tc = tcase_create("cli");
+    tcase_set_timeout(tc, 120);
+    tcase_add_test(tc, test_help_version);
+    tcase_add_test(tc, test_usage_errors);
+    tcase_add_test(tc, test_shipped_files_valid);
+    tcase_add_test(tc, test_shared_examples);
+    tcase_add_test(tc, test_bad_corpus);
+    suite_add_tcase(s, tc);
+    return s;
+}
