@@ -13,7 +13,8 @@
  *                 F_I = [ v ; M^-1 (f_stretch + f_edge + f_shear) ]
  *             and explicit part F_E = [ 0 ; M^-1 (f_bend + f_gravity +
  *             f_air) ] (numerics.md 3.4: x' = v belongs in F_I); KLU on
- *             dF_I/dy; Lagrange interpolant for dense output (stiff).
+ *             dF_I/dy; Lagrange interpolant for dense output (stiff);
+ *             stage predictor = maximum-order interpolant (see below).
  * arkode-dirk ARKStep fully implicit, ESDIRK4(3)6L[2]SA (Kennedy & Carpenter
  *             2016), L-stable and stiffly accurate; KLU on the exact J.
  * arkode-erk  ERKStep, Dormand-Prince 5(4) (explicit baseline).
@@ -59,6 +60,13 @@
 typedef char drape_check_sunindextype[sizeof(sunindextype) == sizeof(int64_t) ? 1 : -1];
 
 typedef enum sun_kind { SK_CVODE, SK_IMEX, SK_DIRK, SK_ERK } sun_kind;
+
+/* Newton's initial guess for each implicit stage: 1 = the maximum-order
+ * interpolant of the last step.  With ARKODE's default trivial predictor
+ * (0, the previous step's solution) Newton's three iterations kept failing
+ * on the hang test scene and the step was convergence-limited: 2-3x more
+ * steps and 5x the time (docs/integrators.md). */
+#define ARK_IMPLICIT_PREDICTOR 1
 
 /* Parts in the implicit partition of arkode-imex (numerics.md 3.4). */
 #define IMEX_IMPLICIT_PARTS (DRAPE_PART_STRETCH | DRAPE_PART_EDGE | DRAPE_PART_SHEAR)
@@ -303,10 +311,7 @@ static void *sun_alloc(sun_kind kind, const char *name, drape_ode *ode,
         TRY(ARKStepSetInterpolantType(s->mem, ARK_INTERP_LAGRANGE));
         TRY(ARKStepSetLinearSolver(s->mem, s->LS, s->A));
         TRY(ARKStepSetJacFn(s->mem, jac_cb));
-        if (getenv("XNLI")) TRY(ARKStepSetMaxNonlinIters(s->mem, atoi(getenv("XNLI"))));
-        if (getenv("XPRED")) TRY(ARKStepSetPredictorMethod(s->mem, atoi(getenv("XPRED"))));
-        if (getenv("XCOEF")) TRY(ARKStepSetNonlinConvCoef(s->mem, atof(getenv("XCOEF"))));
-        if (getenv("XDEDUCE")) TRY(ARKStepSetDeduceImplicitRhs(s->mem, 1));
+        TRY(ARKStepSetPredictorMethod(s->mem, ARK_IMPLICIT_PREDICTOR));
         if (o->t_stop > 0.0) TRY(ARKStepSetStopTime(s->mem, o->t_stop));
         if (o->h_init > 0.0) TRY(ARKStepSetInitStep(s->mem, o->h_init));
         break;
