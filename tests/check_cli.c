@@ -93,33 +93,66 @@ START_TEST(test_shared_examples)
 END_TEST
 
 /* tests/bad: each file is rejected with a non-zero status and a GNU-style
- * message naming the file and a line. */
+ * message "drape: FILE:LINE:COL: KEY: ...".  A file's first line may say
+ * what is expected: "# expect LINE KEY: why" (KEY may be empty); then the
+ * message must name that line and key. */
+static void expect_header(const char *path, int *line, char *key, size_t nkey)
+{
+    *line = 0;
+    key[0] = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) return;
+    char buf[512];
+    if (fgets(buf, sizeof buf, f) && strncmp(buf, "# expect ", 9) == 0) {
+        char *p = buf + 9, *end;
+        *line = (int)strtol(p, &end, 10);
+        p = end + (*end == ' ');
+        char *colon = strchr(p, ':');
+        size_t n = colon ? (size_t)(colon - p) : 0;
+        if (n >= nkey) n = nkey - 1;
+        memcpy(key, p, n);
+        key[n] = 0;
+    }
+    fclose(f);
+}
+
 START_TEST(test_bad_corpus)
 {
     DIR *d = opendir("bad");
     ck_assert_msg(d != NULL, "tests/bad missing");
     struct dirent *e;
-    int n = 0;
+    int n = 0, n_expect = 0;
     while ((e = readdir(d)) != NULL) {
         size_t len = strlen(e->d_name);
         if (len < 6 || strcmp(e->d_name + len - 5, ".yaml") != 0) continue;
-        char args[1024], prefix[600];
-        snprintf(args, sizeof args, "check 'bad/%s'", e->d_name);
+        char args[1024], path[600], key[256], pat[300];
+        int line;
+        snprintf(path, sizeof path, "bad/%s", e->d_name);
+        expect_header(path, &line, key, sizeof key);
+        snprintf(args, sizeof args, "check '%s'", path);
         int st = tu_run_drape(args, out, CAP, err, CAP);
         ck_assert_msg(st != 0 && st != 2 && st < 64,
                       "%s: status %d (want 1, 3 or 5), stderr: %s", e->d_name, st, err);
         ck_assert_msg(strstr(out, "valid") == NULL, "%s: printed a summary", e->d_name);
-        /* the message names the bad file, or (for a scene whose fabric is bad)
-         * another file, always with a line number */
-        snprintf(prefix, sizeof prefix, "drape: ");
-        ck_assert_msg(strncmp(err, prefix, strlen(prefix)) == 0, "%s: %s", e->d_name, err);
-        const char *colon = strstr(err, ".yaml:");
-        ck_assert_msg(colon && colon[6] >= '1' && colon[6] <= '9',
-                      "%s: no FILE:LINE in: %s", e->d_name, err);
+        ck_assert_msg(strncmp(err, "drape: ", 7) == 0, "%s: %s", e->d_name, err);
+        /* the message names a .yaml file (the bad file, or the fabric it loads) */
+        ck_assert_msg(strstr(err, ".yaml") != NULL, "%s: no file named in: %s", e->d_name, err);
+        if (line > 0) {
+            snprintf(pat, sizeof pat, ".yaml:%d:", line);
+            ck_assert_msg(strstr(err, pat) != NULL, "%s: want line %d in: %s", e->d_name,
+                          line, err);
+            n_expect++;
+        }
+        if (key[0]) {
+            snprintf(pat, sizeof pat, " %s: ", key);
+            ck_assert_msg(strstr(err, pat) != NULL, "%s: want key `%s` in: %s", e->d_name,
+                          key, err);
+        }
         n++;
     }
     closedir(d);
-    ck_assert_msg(n >= 10, "only %d bad inputs", n);
+    ck_assert_msg(n >= 30, "only %d bad inputs", n);
+    ck_assert_msg(n_expect >= n - 2, "only %d of %d bad inputs say what they expect", n_expect, n);
 }
 END_TEST
 
