@@ -15,7 +15,7 @@
 #include "drape/fit.h"
 
 #define DRAPE_FABRIC_NAME_MAX 128
-#define DRAPE_FABRIC_TEXT_MAX 1024
+#define DRAPE_FABRIC_TEXT_MAX 4096
 
 /* Material directions.  The lattice's i axis runs along the weft, j along
  * the warp (MODEL.md section 2). */
