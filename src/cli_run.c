@@ -45,6 +45,8 @@ static const char run_usage[] =
     "  --spacing LEN            lattice spacing, e.g. 5mm or '0.5 cm'\n"
     "  --energy-form FORM       consistent or seed\n"
     "  --t-max T                end time, e.g. 3s\n"
+    "  --max-steps N            give up (status failed) after N integrator steps\n"
+    "                           between two output points (default 1000000)\n"
     "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR\n"
     "  --format json|csv        result format on stdout (default json)\n"
     "  -q, --quiet              no progress on stderr\n"
@@ -240,7 +242,7 @@ static int ensure_dir(const char *dir, drape_error *err)
 int drape_cli_run(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
-           O_TMAX, O_OUT, O_FORMAT };
+           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -250,6 +252,7 @@ int drape_cli_run(int argc, char **argv)
         {"energy-form", required_argument, NULL, O_FORM},
         {"t-max", required_argument, NULL, O_TMAX},
         {"out", required_argument, NULL, O_OUT},
+        {"max-steps", required_argument, NULL, O_MAXSTEPS},
         {"format", required_argument, NULL, O_FORMAT},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
@@ -257,6 +260,7 @@ int drape_cli_run(int argc, char **argv)
     const char *fabric_path = NULL, *integrator = NULL, *form = NULL, *out_dir = NULL;
     double rtol = 0, atol = 0, spacing = 0, t_max = 0;
     int csv = 0, quiet = 0, c;
+    long max_steps = 0;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;
@@ -279,6 +283,14 @@ int drape_cli_run(int argc, char **argv)
             if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
             break;
         case O_OUT: out_dir = optarg; break;
+        case O_MAXSTEPS: {
+            char *end;
+            errno = 0;
+            max_steps = strtol(optarg, &end, 10);
+            if (errno || *end || max_steps <= 0)
+                return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
+            break;
+        }
         case O_FORMAT:
             if (strcmp(optarg, "json") == 0) csv = 0;
             else if (strcmp(optarg, "csv") == 0) csv = 1;
@@ -352,6 +364,7 @@ int drape_cli_run(int argc, char **argv)
     drape_sim_opts so;
     drape_sim_opts_from_scene(&s, &so);
     so.observe_progress = rc.progress;
+    if (max_steps > 0) so.max_steps = max_steps;
     sim_ok = drape_sim_run(m, &so, (rc.obj || rc.h5 || rc.progress) ? observe : NULL, &rc,
                            &res, &err) == 0;
     if (!sim_ok && err.kind != DRAPE_E_NUMERIC) goto fail; /* I/O or input: no result */
