@@ -47,10 +47,11 @@ CLI_SRC  ?= src/main.c $(wildcard src/cli_*.c)
 TEST_SRC ?= $(wildcard tests/check_*.c)
 LIB_OBJ  = $(LIB_SRC:%.c=$(O)/%.o)
 CLI_OBJ  = $(CLI_SRC:%.c=$(O)/%.o)
-TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(O)/tests/testutil.o
+TEST_HELPERS = tests/testutil.c tests/elastica.c
+TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
 HEADERS  = $(wildcard include/drape/*.h)
 
-.PHONY: all deps run check unit install clean
+.PHONY: all deps run check unit validate install clean
 
 all: drape
 
@@ -73,7 +74,7 @@ $(O)/src/%.o: src/%.c $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -c -o $@ $<
 
-$(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h $(O)/tests/suites.gen.h
+$(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h tests/elastica.h $(O)/tests/suites.gen.h
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(CHECK_CFLAGS) -I$(O)/tests -c -o $@ $<
 
@@ -96,6 +97,10 @@ check: drape $(O)/tests/check_drape
 
 unit: $(O)/tests/check_drape
 	cd tests && $(abspath $(O))/tests/check_drape
+
+# Validation against analytic and reference solutions (docs/validation.md).
+validate: drape
+	scripts/validate.sh
 
 install: drape
 	install -d $(DESTDIR)$(BINDIR)

@@ -1,0 +1,290 @@
+/* elastica.c: reference solutions for check_validation.c (test-only code,
+ * not part of the drape library): the heavy cantilever elastica by
+ * shooting, and the elastic catenary in closed form.
+ *
+ * ---- Heavy cantilever ----
+ *
+ * Inextensible strip, linear bending M = B K, weight w = W g per unit
+ * length (all per unit width), clamped horizontally at s = 0, free at
+ * s = L.  theta(s) is the slope angle below horizontal, x(s) the reach,
+ * d(s) the drop (positive down).  The bending moment at s is that of the
+ * weight of the part beyond s about the point s:
+ *
+ *   M(s) = integral_s^L w (x(s') - x(s)) ds'                        (E1)
+ *   B theta'(s) = M(s)                                             (E2)
+ *   M'(s) = -w integral_s^L x'(s) ds' = -w (L - s) cos theta(s)     (E3)
+ *   x' = cos theta,  d' = sin theta                                (E4)
+ *   theta(0) = 0,  M(L) = 0,  x(0) = d(0) = 0.                     (E5)
+ *
+ * With t = s / L and mu = M L / B:
+ *   theta_t = mu,  mu_t = -Gamma (1 - t) cos theta,  Gamma = w L^3 / B.
+ *
+ * Shooting: integrate from t = 0 with theta = 0, mu = mu0 (GSL rk8pd,
+ * absolute and relative tolerance 1e-12) and find the root of
+ * r(mu0) = mu(1) by Brent's method on [0, Gamma / 2].  In the physical
+ * solution M > 0 on [0, L) and theta rises monotonically in [0, pi/2)
+ * (then every x(s') > x(s) in (E1)).  For large Gamma, mu(1) = 0 has
+ * further roots where the strip curls past the vertical or up above the
+ * horizontal and round (|theta| > pi/2, where cos theta < 0 makes mu grow
+ * again); so a shot whose theta leaves [0, pi/2] counts as too much
+ * (theta > pi/2: r = +Gamma) or too little (theta < 0: r = -Gamma) clamp
+ * moment.  Inside [0, pi/2], r(0) <= -Gamma int (1 - t) cos theta < 0 and
+ * r(Gamma / 2) = Gamma int (1 - t) (1 - cos theta) > 0, so the bracket
+ * holds and Brent finds the physical root.  Small Gamma: mu0 -> Gamma / 2 and the tip drop
+ * -> Gamma / 8 (Euler-Bernoulli, w L^4 / (8 B)).
+ *
+ * Peirce's closed form (Peirce 1930, J. Textile Inst. 21 T377; ASTM D1388):
+ * c = L (cos(theta/2) / (8 tan theta))^(1/3) with theta the chord angle;
+ * the exact bending length c = (B / (W g))^(1/3) = L Gamma^(-1/3).
+ *
+ * ---- Elastic catenary (Irvine 1981, Cable Structures, MIT Press, 1.3) ----
+ * Flexible cable, unstretched length l0, weight w per unit unstretched
+ * length, tension T = k eps (eps = stretched / unstretched length - 1),
+ * supports at the same height a distance l apart.  With H the constant
+ * horizontal tension, V = w l0 / 2 and s the unstretched arc length from
+ * the left support:
+ *   T(s) = sqrt(H^2 + (V - w s)^2)                                  (C1)
+ *   x(s) = H s / k + (H / w) [asinh(V / H) - asinh((V - w s) / H)]   (C2)
+ *   z(s) = (V s - w s^2 / 2) / k
+ *          + (H / w) [sqrt(1 + (V / H)^2) - sqrt(1 + ((V - w s) / H)^2)]  (C3)
+ * (z downward), from dx/ds = (1 + T / k) H / T, dz/ds = (1 + T / k)
+ * (V - w s) / T.  H solves x(l0) = l:
+ *   H l0 / k + (2 H / w) asinh(w l0 / (2 H)) = l,                    (C4)
+ * whose left side rises monotonically from 0 (H -> 0) to infinity; sag =
+ * z(l0 / 2), support tension T(0).  As k -> infinity this is the common
+ * catenary l0 = 2 a sinh(l / (2 a)), sag = a (cosh(l / (2 a)) - 1),
+ * a = H / w.
+ */
+#include "elastica.h"
+
+#include <math.h>
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+#include <gsl/gsl_roots.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#define ELASTICA_ODE_TOL 1e-12
+#define ELASTICA_ROOT_TOL 1e-13
+#define ELASTICA_MAX_ITER 200
+/* Shooting from the clamp amplifies errors by about exp((2/3) sqrt(Gamma))
+ * (near the vertical the deviation pi/2 - theta obeys Airy's equation
+ * phi'' = Gamma (1 - t) phi, whose growing solution Bi sets the
+ * sensitivity of mu(1) to mu0): 6e5 at Gamma = 400, where the tip slope
+ * is within 1e-4 rad of the vertical. */
+#define ELASTICA_GAMMA_MAX 400.0
+/* Below this the shot's residual mu(1) ~ Gamma^3 is lost in rounding. */
+#define ELASTICA_GAMMA_MIN 1e-6
+
+static int rhs(double t, const double y[], double dydt[], void *params)
+{
+    double gamma = *(const double *)params;
+    dydt[0] = y[1];
+    dydt[1] = -gamma * (1.0 - t) * cos(y[0]);
+    dydt[2] = cos(y[0]);
+    dydt[3] = sin(y[0]);
+    return GSL_SUCCESS;
+}
+
+/* Integrate from t = 0 to each of the n times ts[] (increasing, last 1)
+ * with mu(0) = mu0; y_at (4 n, may be NULL) gets the state at each. */
+static int shoot(double gamma, double mu0, int n, const double *ts,
+                 double *y_at, double yend[4])
+{
+    gsl_odeiv2_system sys = {rhs, NULL, 4, &gamma};
+    /* theta and mu scale with gamma when it is small */
+    gsl_odeiv2_driver *d = gsl_odeiv2_driver_alloc_y_new(
+        &sys, gsl_odeiv2_step_rk8pd, 1e-3, ELASTICA_ODE_TOL * fmin(1.0, gamma),
+        ELASTICA_ODE_TOL);
+    if (!d) return -1;
+    double y[4] = {0.0, mu0, 0.0, 0.0}, t = 0.0;
+    int rc = 0;
+    for (int k = 0; k < n && rc == 0; k++) {
+        if (ts[k] > t && gsl_odeiv2_driver_apply(d, &t, ts[k], y) != GSL_SUCCESS)
+            rc = -1;
+        if (y_at)
+            for (int c = 0; c < 4; c++) y_at[4 * k + c] = y[c];
+    }
+    for (int c = 0; c < 4; c++) yend[c] = y[c];
+    gsl_odeiv2_driver_free(d);
+    return rc;
+}
+
+typedef struct residual_ctx {
+    double gamma;
+    int failed;
+} residual_ctx;
+
+/* mu(1) for mu(0) = mu0; +gamma (too much clamp moment) if the strip
+ * turns past the vertical, -gamma (too little) if it turns up above the
+ * horizontal (both checked at ELASTICA_CHECKS points). */
+static double residual(double mu0, void *params)
+{
+    enum { ELASTICA_CHECKS = 256 };
+    residual_ctx *c = params;
+    double ts[ELASTICA_CHECKS], ys[4 * ELASTICA_CHECKS], y[4];
+    for (int k = 0; k < ELASTICA_CHECKS; k++) ts[k] = (k + 1.0) / ELASTICA_CHECKS;
+    if (shoot(c->gamma, mu0, ELASTICA_CHECKS, ts, ys, y) != 0) {
+        c->failed = 1;
+        return NAN;
+    }
+    for (int k = 0; k < ELASTICA_CHECKS; k++) {
+        if (ys[4 * k] > 0.5 * M_PI) return c->gamma;
+        if (ys[4 * k] < 0.0) return -c->gamma;
+    }
+    return y[1];
+}
+
+/* Brent on f over [lo, hi] (a sign change is assumed), absolute tolerance
+ * epsabs, relative ELASTICA_ROOT_TOL. */
+static int brent(gsl_function *f, double lo, double hi, double epsabs, double *root)
+{
+    gsl_root_fsolver *s = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
+    if (!s) return -1;
+    int rc = -1;
+    if (gsl_root_fsolver_set(s, f, lo, hi) != GSL_SUCCESS) goto out;
+    for (int it = 0; it < ELASTICA_MAX_ITER; it++) {
+        if (gsl_root_fsolver_iterate(s) != GSL_SUCCESS) goto out;
+        double a = gsl_root_fsolver_x_lower(s), b = gsl_root_fsolver_x_upper(s);
+        if (gsl_root_test_interval(a, b, epsabs, ELASTICA_ROOT_TOL) ==
+            GSL_SUCCESS) {
+            *root = gsl_root_fsolver_root(s);
+            rc = 0;
+            break;
+        }
+    }
+out:
+    gsl_root_fsolver_free(s);
+    return rc;
+}
+
+static int solve_mu0(double gamma, double *mu0)
+{
+    gsl_set_error_handler_off();
+    if (!(gamma >= ELASTICA_GAMMA_MIN) || gamma > ELASTICA_GAMMA_MAX) return -1;
+    residual_ctx c = {gamma, 0};
+    gsl_function f = {residual, &c};
+    if (brent(&f, 0.0, 0.5 * gamma, ELASTICA_ROOT_TOL * fmin(1.0, gamma), mu0) != 0 ||
+        c.failed)
+        return -1;
+    return 0;
+}
+
+int elastica_solve(double gamma, elastica_solution *out)
+{
+    double mu0, one = 1.0, y[4];
+    if (solve_mu0(gamma, &mu0) != 0) return -1;
+    if (shoot(gamma, mu0, 1, &one, NULL, y) != 0) return -1;
+    out->gamma = gamma;
+    out->mu0 = mu0;
+    out->tip_slope = y[0];
+    out->tip_x = y[2];
+    out->tip_drop = y[3];
+    out->chord = atan2(y[3], y[2]);
+    out->ratio = y[3] / y[2];
+    return 0;
+}
+
+int elastica_shape(double gamma, int n, double *x, double *drop)
+{
+    enum { NMAX = 4096 };
+    static double ts[NMAX], ys[4 * NMAX];
+    double mu0, y[4];
+    if (n < 2 || n > NMAX) return -1;
+    if (solve_mu0(gamma, &mu0) != 0) return -1;
+    for (int k = 0; k < n; k++) ts[k] = (double)k / (n - 1);
+    if (shoot(gamma, mu0, n, ts, ys, y) != 0) return -1;
+    for (int k = 0; k < n; k++) {
+        x[k] = ys[4 * k + 2];
+        drop[k] = ys[4 * k + 3];
+    }
+    return 0;
+}
+
+typedef struct chord_ctx {
+    double target;
+    int failed;
+} chord_ctx;
+
+static double chord_residual(double log_gamma, void *params)
+{
+    chord_ctx *c = params;
+    elastica_solution s;
+    if (elastica_solve(exp(log_gamma), &s) != 0) {
+        c->failed = 1;
+        return NAN;
+    }
+    return s.chord - c->target;
+}
+
+int elastica_gamma_for_chord(double chord, double *gamma)
+{
+    gsl_set_error_handler_off();
+    if (!(chord >= 1e-4 * M_PI / 180.0) || chord > 80.0 * M_PI / 180.0) return -1;
+    chord_ctx c = {chord, 0};
+    gsl_function f = {chord_residual, &c};
+    double lg;
+    /* chord(Gamma) rises from 4e-5 deg (Gamma = 1e-6) to 86 deg (400) */
+    if (brent(&f, log(ELASTICA_GAMMA_MIN), log(ELASTICA_GAMMA_MAX), ELASTICA_ROOT_TOL, &lg) !=
+            0 ||
+        c.failed)
+        return -1;
+    *gamma = exp(lg);
+    return 0;
+}
+
+double elastica_peirce_c_over_l(double theta)
+{
+    return cbrt(cos(0.5 * theta) / (8.0 * tan(theta)));
+}
+
+/* ---- elastic catenary ---- */
+
+typedef struct span_ctx {
+    double w, k, l0, span;
+} span_ctx;
+
+/* (C4) in log H, minus the span */
+static double span_residual(double log_h, void *params)
+{
+    const span_ctx *c = params;
+    double h = exp(log_h);
+    return h * c->l0 / c->k + 2.0 * h / c->w * asinh(c->w * c->l0 / (2.0 * h)) -
+           c->span;
+}
+
+int catenary_solve(double w, double k, double l0, double span,
+                   catenary_solution *out)
+{
+    gsl_set_error_handler_off();
+    if (!(w > 0.0) || !(k > 0.0) || !(l0 > 0.0) || !(span > 0.0)) return -1;
+    span_ctx c = {w, k, l0, span};
+    gsl_function f = {span_residual, &c};
+    /* (C4) tends to 0 as H -> 0 and exceeds H l0 / k = l0 + span > span
+     * at H = k (1 + span / l0) */
+    double lo = log(1e-12 * w * l0), hi = log(k * (1.0 + span / l0)), lh;
+    if (!(span_residual(lo, &c) < 0.0 && span_residual(hi, &c) > 0.0)) return -1;
+    if (brent(&f, lo, hi, ELASTICA_ROOT_TOL, &lh) != 0) return -1;
+    out->w = w;
+    out->k = k;
+    out->l0 = l0;
+    out->span = span;
+    out->h = exp(lh);
+    out->v = 0.5 * w * l0;
+    out->t_end = hypot(out->h, out->v);
+    double xm;
+    catenary_point(out, 0.5 * l0, &xm, &out->sag);
+    return 0;
+}
+
+void catenary_point(const catenary_solution *c, double s, double *x,
+                    double *drop)
+{
+    double h = c->h, v = c->v, w = c->w, r = (v - w * s) / h;
+    *x = h * s / c->k + h / w * (asinh(v / h) - asinh(r));
+    *drop = (v * s - 0.5 * w * s * s) / c->k +
+            h / w * (sqrt(1.0 + (v / h) * (v / h)) - sqrt(1.0 + r * r));
+}
