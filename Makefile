@@ -5,6 +5,8 @@
 #   make / all     build ./drape
 #   make run       run the default scene (scenes/cusick.yaml)
 #   make check     build and run the Check test suite
+#   make check-slurm  test scripts/slurm/ on a real single-node Slurm (root;
+#                  installs slurm-wlm and munge; docs/batch.md)
 #   make install   install drape into $(DESTDIR)$(PREFIX)/bin
 #   make clean
 
@@ -16,12 +18,12 @@ LDFLAGS ?=
 
 DEB_PACKAGES = libgsl-dev libsundials-dev libsuitesparse-dev libhdf5-dev \
                libyaml-dev check pkg-config libopenblas-dev \
-               libgeos-dev
+               libgeos-dev libjson-c-dev
 
 # Flags drape itself needs (not overridable: the language level is part of
 # the code).  pkg-config is expanded lazily, so `make deps all` works on a
 # machine that has none of the packages yet.
-PKGS        = gsl yaml-0.1 hdf5-serial geos
+PKGS        = gsl yaml-0.1 hdf5-serial geos json-c
 DRAPE_CPPFLAGS = -Iinclude -I/usr/include/suitesparse \
                  $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 DRAPE_CFLAGS = -std=c99 -D_POSIX_C_SOURCE=200809L -Wall -Wextra \
@@ -33,7 +35,7 @@ DRAPE_LIBS  = -lsundials_arkode -lsundials_cvode -lsundials_kinsol \
               -lsundials_sunlinsolklu -lsundials_sunlinsolspgmr \
               -lklu -lcholmod -lsuitesparseconfig \
               -lgsl -lopenblas \
-              $(shell pkg-config --libs yaml-0.1 hdf5-serial geos 2>/dev/null) -lm
+              $(shell pkg-config --libs yaml-0.1 hdf5-serial geos json-c 2>/dev/null) -lm
 CHECK_CFLAGS = $(shell pkg-config --cflags check 2>/dev/null)
 CHECK_LIBS   = $(shell pkg-config --libs check 2>/dev/null)
 
@@ -51,7 +53,7 @@ TEST_HELPERS = tests/testutil.c tests/elastica.c
 TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
 HEADERS  = $(wildcard include/drape/*.h)
 
-.PHONY: all deps run check unit validate install clean
+.PHONY: all deps run check unit validate check-slurm install clean
 
 all: drape
 
@@ -101,6 +103,10 @@ unit: $(O)/tests/check_drape
 # Validation against analytic and reference solutions (docs/validation.md).
 validate: drape
 	scripts/validate.sh
+
+# Slurm job array scripts against a real single-node Slurm (docs/batch.md).
+check-slurm: drape
+	scripts/check-slurm.sh
 
 install: drape
 	install -d $(DESTDIR)$(BINDIR)

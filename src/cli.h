@@ -18,5 +18,7 @@ void drape_cli_warn(void *ctx, const drape_error *w);
  * status. */
 int drape_cli_check(int argc, char **argv);
 int drape_cli_run(int argc, char **argv);
+int drape_cli_batch(int argc, char **argv);  /* cli_batch.c, docs/batch.md */
+int drape_cli_import(int argc, char **argv); /* cli_import.c, docs/batch.md */
 
 #endif

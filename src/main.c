@@ -21,6 +21,12 @@ static const char usage_text[] =
     "                       stiffness bounds)\n"
     "  run [SCENE.yaml]     run a scene (default scenes/cusick.yaml); one JSON\n"
     "                       object on stdout; `drape run --help` for options\n"
+    "  batch SCENE.yaml FABRIC.yaml...\n"
+    "                       run a scene once per fabric, N at a time; one CSV\n"
+    "                       row per fabric in DIR/results.csv (docs/batch.md)\n"
+    "  import arcsim|kes FILE...\n"
+    "                       write fabric files from ARCSim material JSON or a\n"
+    "                       CSV table of KES-F summary values\n"
     "\n"
     "Options:\n"
     "  -h, --help           show this help and exit\n"
@@ -36,6 +42,7 @@ static const char usage_text[] =
     "  3   input/output error (missing or unreadable file, unwritable output)\n"
     "  4   numerical failure (the run ended with status `failed`)\n"
     "  5   out of memory, or a lattice too large to allocate\n"
+    "  6   drape batch: at least one run failed or could not run\n"
     "  70  internal error (a bug in drape)\n";
 
 void drape_cli_print_error(const drape_error *e)
@@ -85,6 +92,8 @@ int main(int argc, char **argv)
     optind = 0; /* reset getopt for the subcommand (GNU: 0 re-initialises) */
     if (strcmp(cmd, "check") == 0) return drape_cli_check(sub_argc, sub_argv);
     if (strcmp(cmd, "run") == 0) return drape_cli_run(sub_argc, sub_argv);
+    if (strcmp(cmd, "batch") == 0) return drape_cli_batch(sub_argc, sub_argv);
+    if (strcmp(cmd, "import") == 0) return drape_cli_import(sub_argc, sub_argv);
     if (strcmp(cmd, "help") == 0) { fputs(usage_text, stdout); return 0; }
     fprintf(stderr, "drape: unknown command `%s'\nTry `drape --help'.\n", cmd);
     return drape_error_exit_status(DRAPE_E_USAGE);

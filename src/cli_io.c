@@ -1,0 +1,269 @@
+/* cli_io.c: file helpers shared by the command-line files: a small
+ * RFC 4180 CSV reader and writer, whole-file reading, and atomic file
+ * replacement (write a temporary file next to the target, flush, fsync,
+ * rename).  Used by `drape batch` (results.csv, the rows of `drape run`)
+ * and `drape import` (KES-F tables, fabric YAML files).
+ *
+ * CSV (RFC 4180, https://www.rfc-editor.org/rfc/rfc4180): records end with
+ * LF or CRLF; fields are separated by commas; a field may be enclosed in
+ * double quotes, inside which commas, line breaks and doubled quotes ("")
+ * are literal.  Accepted beyond the RFC: LF alone, a missing final line
+ * break, a UTF-8 byte order mark at the start.  Rejected: a quote inside an
+ * unquoted field, text after a closing quote, an unterminated quote, NUL
+ * bytes.  There is no CSV library among the Debian -dev packages drape
+ * builds on, hence this reader (docs/batch.md). */
+#include "cli_io.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "drape/alloc.h"
+
+/* ---- whole files ----------------------------------------------------------- */
+
+char *drape_cli_read_file(const char *path, size_t max, size_t *len,
+                          drape_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf = NULL;
+    size_t n = 0, cap = 4096;
+    if (!f) {
+        drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot open: %s",
+                        strerror(errno));
+        return NULL;
+    }
+    buf = drape_malloc(cap);
+    if (!buf) goto nomem;
+    for (;;) {
+        if (n + 1 >= cap) {
+            if (cap > max) {
+                drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, NULL,
+                                "file larger than %zu bytes", max);
+                goto fail;
+            }
+            char *nb = drape_realloc(buf, cap * 2);
+            if (!nb) goto nomem;
+            buf = nb;
+            cap *= 2;
+        }
+        size_t k = fread(buf + n, 1, cap - n - 1, f);
+        n += k;
+        if (k == 0) break;
+    }
+    if (ferror(f)) {
+        drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "read error");
+        goto fail;
+    }
+    if (n > max) {
+        drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, NULL,
+                        "file larger than %zu bytes", max);
+        goto fail;
+    }
+    fclose(f);
+    buf[n] = 0;
+    if (len) *len = n;
+    return buf;
+nomem:
+    drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+fail:
+    fclose(f);
+    drape_free(buf);
+    return NULL;
+}
+
+/* ---- atomic replacement ------------------------------------------------------ */
+
+int drape_cli_afile_open(drape_cli_afile *a, const char *path, drape_error *err)
+{
+    memset(a, 0, sizeof *a);
+    int r1 = snprintf(a->path, sizeof a->path, "%s", path);
+    int r2 = snprintf(a->tmp, sizeof a->tmp, "%s.tmp.%ld", path, (long)getpid());
+    if (r1 < 0 || (size_t)r1 >= sizeof a->path || r2 < 0 || (size_t)r2 >= sizeof a->tmp)
+        return drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "path too long");
+    /* O_EXCL: never write through a stale temporary or a symlink */
+    unlink(a->tmp);
+    int fd = open(a->tmp, O_WRONLY | O_CREAT | O_EXCL, 0666);
+    if (fd < 0 || !(a->f = fdopen(fd, "w"))) {
+        int e = errno;
+        if (fd >= 0) close(fd);
+        unlink(a->tmp);
+        return drape_error_set(err, DRAPE_E_IO, a->tmp, 0, 0, NULL,
+                               "cannot create: %s", strerror(e));
+    }
+    return 0;
+}
+
+int drape_cli_afile_commit(drape_cli_afile *a, drape_error *err)
+{
+    int e = 0;
+    if (fflush(a->f) != 0 || ferror(a->f)) e = errno ? errno : EIO;
+    if (!e && fsync(fileno(a->f)) != 0 && errno != EINVAL) e = errno;
+    if (fclose(a->f) != 0 && !e) e = errno ? errno : EIO;
+    a->f = NULL;
+    if (!e && rename(a->tmp, a->path) != 0) e = errno;
+    if (e) {
+        unlink(a->tmp);
+        return drape_error_set(err, DRAPE_E_IO, a->path, 0, 0, NULL,
+                               "cannot write: %s", strerror(e));
+    }
+    return 0;
+}
+
+void drape_cli_afile_abort(drape_cli_afile *a)
+{
+    if (a->f) {
+        fclose(a->f);
+        a->f = NULL;
+    }
+    if (a->tmp[0]) unlink(a->tmp);
+}
+
+/* ---- CSV ------------------------------------------------------------------- */
+
+void drape_cli_csv_rec_free(drape_cli_csv_rec *r)
+{
+    if (!r) return;
+    for (int i = 0; i < r->n; i++) drape_free(r->field[i]);
+    drape_free(r->field);
+    drape_free(r->col);
+    memset(r, 0, sizeof *r);
+}
+
+/* Append one field (bytes s[0..n)) to r. */
+static int rec_push(drape_cli_csv_rec *r, const char *s, size_t n, int col)
+{
+    char **nf = drape_realloc(r->field, (size_t)(r->n + 1) * sizeof *nf);
+    if (!nf) return -1;
+    r->field = nf;
+    int *nc = drape_realloc(r->col, (size_t)(r->n + 1) * sizeof *nc);
+    if (!nc) return -1;
+    r->col = nc;
+    char *t = drape_malloc(n + 1);
+    if (!t) return -1;
+    memcpy(t, s, n);
+    t[n] = 0;
+    r->field[r->n] = t;
+    r->col[r->n] = col;
+    r->n++;
+    return 0;
+}
+
+int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
+                       drape_cli_csv_rec *r, const char *file, drape_error *err)
+{
+    memset(r, 0, sizeof *r);
+    if (p->line == 0) { /* first call */
+        p->line = 1;
+        p->col = 1;
+        if (len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0) p->off = 3;
+    }
+    if (p->off >= len) return 0;
+    r->line = p->line;
+    char *buf = NULL; /* unquoted text of the current field */
+    size_t cap = 0;
+    for (;;) { /* one field per iteration */
+        size_t n = 0;
+        int col = p->col;
+        const char *c = text + p->off;
+        if (p->off < len && *c == '"') {
+            int qline = p->line, qcol = p->col;
+            p->off++, p->col++;
+            for (;;) {
+                if (p->off >= len) {
+                    drape_error_set(err, DRAPE_E_INPUT, file, qline, qcol, NULL,
+                                    "unterminated quoted field");
+                    goto fail;
+                }
+                char ch = text[p->off];
+                if (ch == '"') {
+                    if (p->off + 1 < len && text[p->off + 1] == '"') {
+                        p->off += 2, p->col += 2;
+                    } else {
+                        p->off++, p->col++;
+                        break;
+                    }
+                } else if (ch == 0) {
+                    drape_error_set(err, DRAPE_E_INPUT, file, p->line, p->col, NULL,
+                                    "NUL byte in a CSV file");
+                    goto fail;
+                } else {
+                    p->off++, p->col++;
+                    if (ch == '\n') p->line++, p->col = 1;
+                }
+                if (n + 1 >= cap) {
+                    size_t nc = cap ? cap * 2 : 64;
+                    char *nb = drape_realloc(buf, nc);
+                    if (!nb) goto nomem;
+                    buf = nb, cap = nc;
+                }
+                buf[n++] = ch;
+            }
+            if (p->off < len && text[p->off] != ',' && text[p->off] != '\n' &&
+                !(text[p->off] == '\r' && p->off + 1 < len && text[p->off + 1] == '\n')) {
+                drape_error_set(err, DRAPE_E_INPUT, file, p->line, p->col, NULL,
+                                "text after the closing quote of a field "
+                                "(a quote inside a quoted field is written \"\")");
+                goto fail;
+            }
+            if (rec_push(r, n ? buf : "", n, col) != 0) goto nomem;
+        } else {
+            size_t start = p->off;
+            while (p->off < len && text[p->off] != ',' && text[p->off] != '\n' &&
+                   !(text[p->off] == '\r' && p->off + 1 < len && text[p->off + 1] == '\n')) {
+                if (text[p->off] == '"') {
+                    drape_error_set(err, DRAPE_E_INPUT, file, p->line, p->col, NULL,
+                                    "quote inside an unquoted field (enclose the "
+                                    "field in quotes and double the quote)");
+                    goto fail;
+                }
+                if (text[p->off] == 0) {
+                    drape_error_set(err, DRAPE_E_INPUT, file, p->line, p->col, NULL,
+                                    "NUL byte in a CSV file");
+                    goto fail;
+                }
+                p->off++, p->col++;
+            }
+            if (rec_push(r, text + start, p->off - start, col) != 0) goto nomem;
+        }
+        if (p->off >= len) break;
+        if (text[p->off] == ',') {
+            p->off++, p->col++;
+            continue;
+        }
+        /* end of record: LF or CRLF */
+        p->off += text[p->off] == '\r' ? 2 : 1;
+        p->line++, p->col = 1;
+        break;
+    }
+    drape_free(buf);
+    return 1;
+nomem:
+    drape_error_set(err, DRAPE_E_NOMEM, file, p->line, 0, NULL, "out of memory");
+fail:
+    drape_free(buf);
+    drape_cli_csv_rec_free(r);
+    return -1;
+}
+
+void drape_cli_csv_put(FILE *out, const char *s)
+{
+    if (!s) return;
+    int quote = s[0] == ' ' || (s[0] && s[strlen(s) - 1] == ' ');
+    for (const char *c = s; *c && !quote; c++)
+        quote = *c == ',' || *c == '"' || *c == '\n' || *c == '\r';
+    if (!quote) {
+        fputs(s, out);
+        return;
+    }
+    fputc('"', out);
+    for (const char *c = s; *c; c++) {
+        if (*c == '"') fputc('"', out);
+        fputc(*c, out);
+    }
+    fputc('"', out);
+}

@@ -1,0 +1,54 @@
+/* cli_io.h: file helpers of the command-line files (cli_io.c): whole-file
+ * reading, atomic file replacement, and a small RFC 4180 CSV reader and
+ * writer.  Private to src/main.c and src/cli_*.c; only these print. */
+#ifndef DRAPE_CLI_IO_H
+#define DRAPE_CLI_IO_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "drape/error.h"
+
+/* Read a whole file of at most max bytes into a NUL-terminated buffer
+ * (*len = its length, may be NULL).  Caller frees with drape_free.  NULL
+ * and err on failure. */
+char *drape_cli_read_file(const char *path, size_t max, size_t *len,
+                          drape_error *err);
+
+/* Replace a file atomically: open writes to PATH.tmp.PID next to it;
+ * commit flushes, fsyncs and renames it over PATH; abort removes it.  A
+ * reader sees either the old or the new file, never a partial one. */
+typedef struct drape_cli_afile {
+    FILE *f;         /* write the contents here */
+    char path[4096]; /* target */
+    char tmp[4160];  /* temporary, same directory */
+} drape_cli_afile;
+int drape_cli_afile_open(drape_cli_afile *a, const char *path, drape_error *err);
+int drape_cli_afile_commit(drape_cli_afile *a, drape_error *err);
+void drape_cli_afile_abort(drape_cli_afile *a);
+
+/* CSV reader: position in a text (zero-initialise before the first call)
+ * and one record (fields unquoted, NUL-terminated; col[i] is the 1-based
+ * column where field i starts, line the line where the record starts). */
+typedef struct drape_cli_csv_pos {
+    size_t off;
+    int line, col;
+} drape_cli_csv_pos;
+typedef struct drape_cli_csv_rec {
+    int n;
+    char **field;
+    int *col;
+    int line;
+} drape_cli_csv_rec;
+/* Read the next record of text[0..len).  Returns 1 and fills *r (caller
+ * frees with drape_cli_csv_rec_free), 0 at the end of the text, or -1 and
+ * fills err (file:line:column) for malformed CSV.  A blank line is a
+ * record of one empty field. */
+int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
+                       drape_cli_csv_rec *r, const char *file, drape_error *err);
+void drape_cli_csv_rec_free(drape_cli_csv_rec *r);
+/* Write one field, quoted when it holds a comma, quote, line break or
+ * leading/trailing space. */
+void drape_cli_csv_put(FILE *out, const char *s);
+
+#endif /* DRAPE_CLI_IO_H */

@@ -1,0 +1,404 @@
+/* check_batch.c: `drape batch` end to end through the binary, on tiny runs
+ * (the hang scene at 5 cm spacing, 0.05 s): one row per fabric with the
+ * keys of `drape run --format csv` (compared with a direct run of the same
+ * fabric), an error row for an invalid fabric, exit statuses, --resume
+ * (which fabrics run again is seen from the per-fabric logs), -j 2 giving
+ * the rows of -j 1, and a clean stop on SIGINT.  The CSV is read back with
+ * a parser of this file, not the one under test. */
+#include <dirent.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "testutil.h"
+
+#define CAP 65536
+static char out[CAP], err[CAP];
+
+#define SCENE "../scenes/hang.yaml"
+#define TINY "--spacing 5cm --t-max 0.05s"
+#define COTTON "../fabrics/cotton-breen.yaml"
+#define DENIM "../fabrics/denim-wang.yaml"
+#define MAXF 64
+#define MAXR 16
+
+typedef struct table {
+    int nrow, ncol;
+    char *hdr[MAXF];
+    char *row[MAXR][MAXF];
+    char text[CAP];
+} table;
+
+static const char *subdir(const char *name)
+{
+    static char p[4][512];
+    static int slot;
+    char *d = p[slot++ % 4];
+    snprintf(d, 512, "%s/%s", tu_scratch_dir(), name);
+    return d;
+}
+
+static int read_text(const char *path, char *buf, size_t cap)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return -1;
+    size_t n = fread(buf, 1, cap - 1, f);
+    buf[n] = 0;
+    fclose(f);
+    return 0;
+}
+
+/* Split one CSV line in place (quoted fields with "" inside); returns the
+ * number of fields. */
+static int split(char *s, char **f, int max)
+{
+    int n = 0;
+    for (;;) {
+        ck_assert(n < max);
+        if (*s == '"') {
+            char *w = ++s;
+            f[n++] = w;
+            for (;;) {
+                ck_assert_msg(*s, "unterminated quote");
+                if (*s == '"' && s[1] == '"') *w++ = '"', s += 2;
+                else if (*s == '"') { s++; break; }
+                else *w++ = *s++;
+            }
+            char *end = s;
+            *w = 0;
+            if (*end == 0) return n;
+            ck_assert_int_eq(*end, ',');
+            s = end + 1;
+        } else {
+            f[n++] = s;
+            char *c = strchr(s, ',');
+            if (!c) return n;
+            *c = 0;
+            s = c + 1;
+        }
+    }
+}
+
+/* results.csv of a batch directory */
+static void load_table(const char *dir, table *t)
+{
+    char p[1024];
+    snprintf(p, sizeof p, "%s/results.csv", dir);
+    ck_assert_msg(read_text(p, t->text, sizeof t->text) == 0, "no %s", p);
+    char *line = t->text, *nl;
+    t->nrow = -1;
+    while (*line && (nl = strchr(line, '\n'))) {
+        *nl = 0;
+        if (t->nrow < 0) t->ncol = split(line, t->hdr, MAXF);
+        else {
+            ck_assert(t->nrow < MAXR);
+            int n = split(line, t->row[t->nrow], MAXF);
+            ck_assert_msg(n == t->ncol, "row %d: %d fields, header %d", t->nrow, n, t->ncol);
+        }
+        t->nrow++;
+        line = nl + 1;
+    }
+    ck_assert_msg(*line == 0, "results.csv does not end with a line break");
+}
+
+static int col(const table *t, const char *key)
+{
+    for (int i = 0; i < t->ncol; i++)
+        if (strcmp(t->hdr[i], key) == 0) return i;
+    ck_abort_msg("no column %s", key);
+    return -1;
+}
+
+static const char *cell(const table *t, int r, const char *key)
+{
+    return t->row[r][col(t, key)];
+}
+
+static int has_log(const char *dir, const char *name)
+{
+    char p[1024];
+    snprintf(p, sizeof p, "%s/logs/%s.stderr", dir, name);
+    return access(p, F_OK) == 0;
+}
+
+static void clear_logs(const char *dir)
+{
+    char p[1024];
+    snprintf(p, sizeof p, "rm -f '%s'/logs/*", dir);
+    ck_assert_int_eq(system(p), 0);
+}
+
+static const char *bad_fabric(void)
+{
+    return tu_write_file("bad-fabric.yaml", "fabric: bad\nwieght: 1\n");
+}
+
+static int batch(const char *dir, const char *fabrics, const char *extra)
+{
+    char args[4096];
+    snprintf(args, sizeof args, "batch -q %s %s " TINY " --out %s %s", SCENE, fabrics, dir,
+             extra ? extra : "");
+    return tu_run_drape(args, out, CAP, err, CAP);
+}
+
+START_TEST(test_rows_and_errors)
+{
+    const char *dir = subdir("rows");
+    char fabrics[1024];
+    snprintf(fabrics, sizeof fabrics, "%s %s %s", COTTON, bad_fabric(), DENIM);
+    ck_assert_msg(batch(dir, fabrics, NULL) == 6, "exit status 6 expected: %s", err);
+    ck_assert_str_eq(out, ""); /* stdout stays clean */
+
+    /* a direct run of the first fabric, for the header and the values */
+    static char direct[CAP];
+    ck_assert_int_eq(tu_run_drape("run -q " SCENE " --fabric " COTTON " " TINY " --format csv",
+                                  direct, CAP, err, CAP), 0);
+    char *nl = strchr(direct, '\n');
+    ck_assert_ptr_nonnull(nl);
+    *nl = 0;
+    char *dval = nl + 1;
+    if ((nl = strchr(dval, '\n'))) *nl = 0;
+
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 3);
+    /* header: fabric_file, exactly the run's keys, error */
+    static char want[CAP + 32], got[CAP + 32];
+    snprintf(want, sizeof want, "fabric_file,%s,error", direct);
+    got[0] = 0;
+    for (int i = 0; i < t->ncol; i++) {
+        strcat(got, i ? "," : "");
+        strcat(got, t->hdr[i]);
+    }
+    ck_assert_str_eq(got, want);
+
+    /* row 0 = the direct run, field by field (wall_s is a timing) */
+    char *dk[MAXF], *dv[MAXF];
+    int nk = split(direct, dk, MAXF), nv = split(dval, dv, MAXF);
+    ck_assert_int_eq(nk, nv);
+    ck_assert_int_eq(nk + 2, t->ncol);
+    for (int i = 0; i < nk; i++)
+        if (strcmp(dk[i], "wall_s") != 0)
+            ck_assert_msg(strcmp(cell(t, 0, dk[i]), dv[i]) == 0, "%s: batch %s, run %s", dk[i],
+                          cell(t, 0, dk[i]), dv[i]);
+    ck_assert_str_eq(cell(t, 0, "fabric_file"), COTTON);
+    ck_assert_str_eq(cell(t, 0, "status"), "t_max");
+    ck_assert_str_eq(cell(t, 0, "error"), "");
+
+    /* row 1: the invalid fabric: no result, the run's message and status */
+    ck_assert_str_eq(cell(t, 1, "status"), "error");
+    ck_assert_str_eq(cell(t, 1, "fabric"), "");
+    ck_assert_str_eq(cell(t, 1, "particles"), "");
+    const char *e = cell(t, 1, "error");
+    ck_assert_msg(strstr(e, "bad-fabric.yaml:2:1: wieght: unknown key") != NULL, "%s", e);
+    ck_assert_msg(strstr(e, "(exit status 1)") != NULL, "%s", e);
+
+    /* row 2 ran too: the batch continues past a failure */
+    ck_assert_str_eq(cell(t, 2, "fabric"), "denim-wang");
+    ck_assert_str_eq(cell(t, 2, "status"), "t_max");
+    ck_assert_str_eq(cell(t, 2, "error"), "");
+    /* a run's warnings are in its log, not in the error column */
+    ck_assert(has_log(dir, "denim-wang"));
+
+    /* no temporary files left */
+    DIR *d = opendir(dir);
+    ck_assert_ptr_nonnull(d);
+    struct dirent *de;
+    while ((de = readdir(d)))
+        ck_assert_msg(strstr(de->d_name, ".tmp") == NULL, "left over: %s", de->d_name);
+    closedir(d);
+    free(t);
+
+    /* all fabrics fine: exit status 0 */
+    ck_assert_msg(batch(subdir("ok"), COTTON, NULL) == 0, "%s", err);
+}
+END_TEST
+
+START_TEST(test_parallel_same_rows)
+{
+    const char *d1 = subdir("j1"), *d2 = subdir("j2");
+    char fabrics[1024];
+    snprintf(fabrics, sizeof fabrics,
+             "%s %s %s ../fabrics/cotton-breen-kes.yaml ../fabrics/polyester-jacket-wang.yaml",
+             COTTON, DENIM, bad_fabric());
+    ck_assert_int_eq(batch(d1, fabrics, "-j 1"), 6);
+    ck_assert_int_eq(batch(d2, fabrics, "-j 2"), 6);
+    table *a = malloc(sizeof *a), *b = malloc(sizeof *b);
+    ck_assert(a && b);
+    load_table(d1, a);
+    load_table(d2, b);
+    ck_assert_int_eq(a->nrow, 5);
+    ck_assert_int_eq(b->nrow, 5);
+    int w = col(a, "wall_s");
+    for (int r = 0; r < 5; r++)
+        for (int i = 0; i < a->ncol; i++)
+            if (i != w)
+                ck_assert_msg(strcmp(a->row[r][i], b->row[r][i]) == 0, "row %d %s: %s vs %s", r,
+                              a->hdr[i], a->row[r][i], b->row[r][i]);
+    free(a);
+    free(b);
+}
+END_TEST
+
+START_TEST(test_resume)
+{
+    const char *dir = subdir("resume");
+    char fabrics[1024], p[1024];
+    snprintf(fabrics, sizeof fabrics, "%s %s %s", COTTON, bad_fabric(), DENIM);
+    ck_assert_int_eq(batch(dir, fabrics, NULL), 6);
+    table *t = malloc(sizeof *t), *u = malloc(sizeof *u);
+    ck_assert(t && u);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 3);
+
+    /* as if the batch had died before denim finished: drop its row */
+    snprintf(p, sizeof p, "%s/results.csv", dir);
+    static char text[CAP];
+    ck_assert_int_eq(read_text(p, text, CAP), 0);
+    char *dl = strstr(text, "\n" DENIM ",");
+    ck_assert_ptr_nonnull(dl);
+    char *end = strchr(dl + 1, '\n');
+    memmove(dl + 1, end + 1, strlen(end + 1) + 1);
+    FILE *f = fopen(p, "w");
+    ck_assert_ptr_nonnull(f);
+    fputs(text, f);
+    fclose(f);
+    clear_logs(dir);
+
+    ck_assert_msg(batch(dir, fabrics, "--resume") == 6, "%s", err);
+    /* denim ran again, and so did the error row; cotton (done) did not */
+    ck_assert(has_log(dir, "denim-wang"));
+    ck_assert(has_log(dir, "bad-fabric"));
+    ck_assert(!has_log(dir, "cotton-breen"));
+    load_table(dir, u);
+    ck_assert_int_eq(u->nrow, 3);
+    ck_assert_str_eq(cell(u, 0, "fabric_file"), COTTON);
+    ck_assert_str_eq(cell(u, 2, "fabric_file"), DENIM);
+    ck_assert_str_eq(cell(u, 2, "status"), "t_max");
+    /* the kept row is the old one, timing included */
+    for (int i = 0; i < t->ncol; i++) ck_assert_str_eq(u->row[0][i], t->row[0][i]);
+
+    /* nothing left to run but the invalid fabric */
+    clear_logs(dir);
+    snprintf(fabrics, sizeof fabrics, "%s %s", COTTON, DENIM);
+    ck_assert_int_eq(batch(dir, fabrics, "--resume"), 0);
+    ck_assert(!has_log(dir, "denim-wang") && !has_log(dir, "cotton-breen"));
+    load_table(dir, u); /* the other fabric's row is kept, after these */
+    ck_assert_int_eq(u->nrow, 3);
+    ck_assert_str_eq(cell(u, 2, "status"), "error");
+
+    /* other run options: refused */
+    char args[2048];
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 4cm --t-max 0.05s --out %s --resume",
+             SCENE, COTTON, dir);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "batch.args") != NULL, "%s", err);
+    free(t);
+    free(u);
+}
+END_TEST
+
+START_TEST(test_failed_run)
+{
+    /* a numerical failure gives a row with status failed and the message;
+     * it is deterministic, so --resume does not run it again */
+    const char *dir = subdir("failed");
+    ck_assert_int_eq(batch(dir, COTTON, "--max-steps 5"), 6);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 1);
+    ck_assert_str_eq(cell(t, 0, "status"), "failed");
+    ck_assert_msg(strstr(cell(t, 0, "error"), "failed at t = ") != NULL, "%s", cell(t, 0, "error"));
+    ck_assert_msg(strstr(cell(t, 0, "error"), "(exit status 4)") != NULL, "%s", cell(t, 0, "error"));
+    clear_logs(dir);
+    ck_assert_int_eq(batch(dir, COTTON, "--max-steps 5 --resume"), 6);
+    ck_assert(!has_log(dir, "cotton-breen"));
+    free(t);
+}
+END_TEST
+
+START_TEST(test_usage)
+{
+    char args[2048];
+    ck_assert_int_eq(tu_run_drape("batch", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("batch " SCENE, out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " -j x", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --rtol 2", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --spacing 5kg", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --integrator euler", out, CAP, err, CAP), 2);
+    /* the scene is checked once, before any run */
+    const char *scene = tu_write_file("bad-scene.yaml", "scene: hang\nspacing: 1 kg\n");
+    snprintf(args, sizeof args, "batch %s %s --out %s", scene, COTTON, subdir("badscene"));
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
+    ck_assert_msg(strstr(err, "bad-scene.yaml") != NULL, "%s", err);
+    /* an output directory that cannot be made */
+    ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --out /proc/drape-batch", out, CAP,
+                                  err, CAP), 3);
+}
+END_TEST
+
+START_TEST(test_sigint_keeps_finished_rows)
+{
+    /* -j 1 over three fabrics of ~0.5 s each; interrupt during the first:
+     * it finishes and is written, no other starts, exit status 130 */
+    const char *dir = subdir("sigint");
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    char e_path[1024];
+    snprintf(e_path, sizeof e_path, "%s/sigint.stderr", tu_scratch_dir());
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        signal(SIGINT, SIG_DFL);
+        if (!freopen("/dev/null", "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
+        execl(bin, "drape", "batch", "-q", SCENE, COTTON, DENIM, "../fabrics/cotton-breen-kes.yaml",
+              "--spacing", "5cm", "--t-max", "0.3s", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    char first[1024];
+    snprintf(first, sizeof first, "%s/logs/cotton-breen.stderr", dir);
+    struct timespec ts = {0, 5 * 1000 * 1000};
+    for (int i = 0; i < 4000 && access(first, F_OK) != 0; i++) nanosleep(&ts, NULL);
+    ck_assert_msg(access(first, F_OK) == 0, "the first run did not start");
+    kill(pid, SIGINT);
+    int ws;
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    ck_assert(WIFEXITED(ws));
+    ck_assert_int_eq(WEXITSTATUS(ws), 130);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    /* every run that started has finished and has its row */
+    int started = has_log(dir, "cotton-breen") + has_log(dir, "denim-wang") +
+                  has_log(dir, "cotton-breen-kes");
+    ck_assert_int_ge(t->nrow, 1);
+    ck_assert_int_lt(t->nrow, 3);
+    ck_assert_int_eq(t->nrow, started);
+    for (int r = 0; r < t->nrow; r++) ck_assert_str_eq(cell(t, r, "status"), "t_max");
+    static char e[CAP];
+    ck_assert_int_eq(read_text(e_path, e, CAP), 0);
+    ck_assert_msg(strstr(e, "interrupted") != NULL, "%s", e);
+    free(t);
+}
+END_TEST
+
+Suite *batch_suite(void)
+{
+    Suite *s = suite_create("batch");
+    TCase *tc = tcase_create("batch");
+    tcase_set_timeout(tc, 60);
+    tcase_add_test(tc, test_rows_and_errors);
+    tcase_add_test(tc, test_parallel_same_rows);
+    tcase_add_test(tc, test_resume);
+    tcase_add_test(tc, test_failed_run);
+    tcase_add_test(tc, test_usage);
+    tcase_add_test(tc, test_sigint_keeps_finished_rows);
+    suite_add_tcase(s, tc);
+    return s;
+}
