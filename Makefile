@@ -7,6 +7,10 @@
 #   make check     build and run the Check test suite
 #   make check-slurm  test scripts/slurm/ on a real single-node Slurm (root;
 #                  installs slurm-wlm and munge; docs/batch.md)
+#   make bench-quick  integrators on the default scenes -> docs/integrators.md
+#   make asan      ASan+UBSan build in build/asan, all suites + a small run
+#   make valgrind  memcheck: drape check/run and the loader suites
+#   make fuzz      fuzz the fabric and scene loaders (FUZZ_TIME=30 s each)
 #   make install   install drape into $(DESTDIR)$(PREFIX)/bin
 #   make clean
 
@@ -99,6 +103,21 @@ check: drape $(O)/tests/check_drape
 
 unit: $(O)/tests/check_drape
 	cd tests && $(abspath $(O))/tests/check_drape
+
+# Benchmarks: wall time, steps and DC per integrator (docs/integrators.md).
+bench-quick: drape
+	scripts/bench-quick.sh
+
+# Reliability (docs/reliability.md); the scripts install valgrind and clang
+# themselves when missing.
+asan:
+	scripts/asan.sh
+
+valgrind: drape $(O)/tests/check_drape
+	O=$(O) scripts/valgrind.sh
+
+fuzz:
+	scripts/fuzz.sh
 
 # Validation against analytic and reference solutions (docs/validation.md).
 validate: drape

@@ -222,6 +222,11 @@ drape_h5 *drape_h5_open(const char *dir, const drape_lattice *L, drape_error *er
 {
     struct stat st;
     drape_h5 *h = NULL;
+    /* HDF5 1.10.8 crashes in its exit handler (H5F__close_cb) when an
+     * H5Fclose failed earlier, e.g. on a full disk; drape closes its files
+     * itself, so the handler is not installed (effective only before the
+     * library's first initialisation; later calls fail harmlessly). */
+    (void)H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     if (stat(dir, &st) != 0) {
         drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "output directory: %s",

@@ -1,0 +1,142 @@
+/* check_faults.c: resource faults met by the drape binary (issue 7, item
+ * 6, in part): a full disk while frames are written, a full stdout, and a
+ * missing fabric.  Each must end with the documented I/O status (3), a
+ * message naming the file, no result on stdout, and no drape.h5 or
+ * temporary file left behind.
+ *
+ * A full disk is simulated with a file size limit (ulimit -f, SIGXFSZ
+ * ignored so write() fails with EFBIG, as it fails with ENOSPC on a full
+ * file system; inherited by drape): no mount or privilege needed.  The 16 KiB limit lets the
+ * first OBJ frame (3.5 KiB for 7 x 7 particles) through and stops the HDF5
+ * file at its first frame; before the fix in drape_h5_open (H5dont_atexit)
+ * HDF5 1.10 crashed in its exit handler here (status 139). */
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "testutil.h"
+
+#define CAP 65536
+static char out[CAP], err[CAP];
+
+static const char *hang = "run ../scenes/hang.yaml --spacing 5cm --t-max 0.2s -q";
+
+/* Absolute path of the drape binary the suite runs. */
+static const char *drape_bin(void)
+{
+    static char bin[1024];
+    const char *b = getenv("DRAPE_BIN");
+    if (!b) b = "../drape";
+    if (b[0] == '/') return b;
+    char cwd[512];
+    ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
+    snprintf(bin, sizeof bin, "%s/%s", cwd, b);
+    return bin;
+}
+
+/* Run drape through a shell prefix (`prefix` is put before the binary). */
+static int run_with(const char *prefix, const char *args)
+{
+    char wrapped[2048];
+    const char *saved = getenv("DRAPE_BIN");
+    char keep[1024] = "";
+    if (saved) snprintf(keep, sizeof keep, "%s", saved);
+    snprintf(wrapped, sizeof wrapped, "%s '%s'", prefix, drape_bin());
+    setenv("DRAPE_BIN", wrapped, 1);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    if (keep[0]) setenv("DRAPE_BIN", keep, 1);
+    else unsetenv("DRAPE_BIN");
+    return st;
+}
+
+/* Number of entries of dir whose name starts with `prefix`. */
+static int count_files(const char *dir, const char *prefix)
+{
+    DIR *d = opendir(dir);
+    ck_assert_ptr_nonnull(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        if (strncmp(e->d_name, prefix, strlen(prefix)) == 0) n++;
+    closedir(d);
+    return n;
+}
+
+static const char *new_dir(const char *name)
+{
+    static char p[600];
+    snprintf(p, sizeof p, "%s/%s", tu_scratch_dir(), name);
+    mkdir(p, 0700);
+    return p;
+}
+
+START_TEST(test_disk_full_while_writing_frames)
+{
+    const char *dir = new_dir("full");
+    char args[1024];
+    snprintf(args, sizeof args, "%s --out '%s'", hang, dir);
+    /* 32 blocks of 512 bytes (POSIX sh units) = 16 KiB */
+    int st = run_with("ulimit -f 32; trap '' XFSZ; exec", args);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_str_eq(out, "");
+    ck_assert_msg(strncmp(err, "drape: ", 7) == 0 && strstr(err, "drape.h5") != NULL,
+                  "message: %s", err);
+    ck_assert_int_eq(count_files(dir, "drape.h5"), 0);
+    ck_assert_int_eq(count_files(dir, "drape.xmf"), 0);
+
+    /* the same run without the limit succeeds: the limit made the failure */
+    const char *ok = new_dir("roomy");
+    snprintf(args, sizeof args, "%s --out '%s'", hang, ok);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "status %d: %s", st, err);
+    ck_assert_int_eq(count_files(ok, "drape.h5"), 1);
+}
+END_TEST
+
+START_TEST(test_stdout_full)
+{
+    /* the result cannot be written: I/O status, not success */
+    int st = run_with("sh -c 'exec \"$0\" \"$@\" >/dev/full'", hang);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_ptr_nonnull(strstr(err, "drape: "));
+}
+END_TEST
+
+START_TEST(test_missing_fabric)
+{
+    const char *p = tu_write_file("orphan.yaml",
+                                  "scene: hang\n"
+                                  "fabric: no-such-fabric.yaml\n"
+                                  "specimen: {shape: rectangle, width: 30 cm, height: 30 cm}\n"
+                                  "spacing: 5 cm\n"
+                                  "end: {t_max: 0.05 s}\n");
+    const char *dir = new_dir("orphan-out");
+    char args[1024];
+    snprintf(args, sizeof args, "run '%s' --out '%s' -q", p, dir);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_str_eq(out, "");
+    ck_assert_msg(strstr(err, "no-such-fabric.yaml") != NULL, "message: %s", err);
+    ck_assert_int_eq(count_files(dir, "drape"), 0);
+    ck_assert_int_eq(count_files(dir, "frame"), 0);
+    snprintf(args, sizeof args, "check '%s'", p);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3, "check: status %d (want 3), stderr: %s", st, err);
+}
+END_TEST
+
+Suite *faults_suite(void); /* found by the runner */
+Suite *faults_suite(void)
+{
+    Suite *s = suite_create("faults");
+    TCase *tc = tcase_create("faults");
+    tcase_set_timeout(tc, 120);
+    tcase_add_test(tc, test_disk_full_while_writing_frames);
+    tcase_add_test(tc, test_stdout_full);
+    tcase_add_test(tc, test_missing_fabric);
+    suite_add_tcase(s, tc);
+    return s;
+}
