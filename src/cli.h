@@ -14,6 +14,12 @@ void drape_cli_print_error(const drape_error *e);
 /* Warning callback for loaders: "drape: FILE:LINE:COL: key: warning: ...". */
 void drape_cli_warn(void *ctx, const drape_error *w);
 
+/* The keys of `drape run`'s result, in output order, as CSV column names
+ * (JSON nests energy_J_*: energy_J {kinetic, ...}); NULL-terminated.  The
+ * contract of issue 3 plus additions; batch uses it for results.csv. */
+extern const char *const drape_cli_run_keys[];
+int drape_cli_run_nkeys(void);
+
 /* Subcommands: argc/argv start at the subcommand name; return the exit
  * status. */
 int drape_cli_check(int argc, char **argv);

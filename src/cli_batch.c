@@ -70,16 +70,9 @@ static const char batch_usage[] =
 /* The keys of `drape run --format csv`, in its order (cli_run.c; the
  * contract of issue 3).  A child's row is mapped onto these by name;
  * tests/check_batch.c checks that the list matches the run's header. */
-static const char *const run_keys[] = {
-    "fabric", "scene", "integrator", "energy_form", "rtol", "atol",
-    "spacing_m", "particles", "free_particles", "status", "t_end_s", "dc",
-    "nodes", "r_min_m", "r_max_m", "tip_angle_deg", "bending_length_m",
-    "flexural_rigidity_Nm", "energy_J_kinetic", "energy_J_stretch",
-    "energy_J_bend", "energy_J_shear", "energy_J_gravity", "max_strain",
-    "wall_s", "steps", "rhs_evals", "jac_evals", "lin_setups",
-    "nonlin_iters", "err_test_fails", "conv_fails", "mass_kg",
-    "area_nominal_m2", "area_mesh_m2", "max_speed_m_s"};
-#define N_RUN_KEYS ((int)(sizeof run_keys / sizeof run_keys[0]))
+/* The run's result keys (cli_run.c), the columns between file and error. */
+#define run_keys drape_cli_run_keys
+#define N_RUN_KEYS drape_cli_run_nkeys()
 /* results.csv columns: fabric_file, the run keys, error */
 #define N_COLS (N_RUN_KEYS + 2)
 #define COL_FILE 0

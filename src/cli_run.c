@@ -13,8 +13,10 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_io.h"
 #include "drape/alloc.h"
 #include "drape/drape.h"
+#include "drape/equilibrium.h"
 #include "drape/fabric.h"
 #include "drape/lattice.h"
 #include "drape/model.h"
@@ -45,6 +47,11 @@ static const char run_usage[] =
     "  --spacing LEN            lattice spacing, e.g. 5mm or '0.5 cm'\n"
     "  --energy-form FORM       consistent or seed\n"
     "  --t-max T                end time, e.g. 3s\n"
+    "  --method METHOD          dynamic (default): integrate the equations of\n"
+    "                           motion in time; static: minimise the potential\n"
+    "                           energy directly (pseudo-transient continuation,\n"
+    "                           Newton, Hessian check; docs/equilibrium.md): only\n"
+    "                           the final state, no transient frames\n"
     "  --max-steps N            give up (status failed) after N integrator steps\n"
     "                           between two output points (default 1000000)\n"
     "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR\n"
@@ -56,6 +63,27 @@ static const char run_usage[] =
     "3 I/O error, 4 the run failed (numerical), 5 out of memory.\n";
 
 /* ---- result fields ----------------------------------------------------- */
+
+const char *const drape_cli_run_keys[] = {
+    "fabric", "scene", "integrator", "energy_form", "rtol", "atol", "spacing_m",
+    "particles", "free_particles", "status", "t_end_s", "dc", "nodes", "r_min_m",
+    "r_max_m", "tip_angle_deg", "bending_length_m", "flexural_rigidity_Nm",
+    "energy_J_kinetic", "energy_J_stretch", "energy_J_bend", "energy_J_shear",
+    "energy_J_gravity", "max_strain", "wall_s", "steps", "rhs_evals", "jac_evals",
+    "lin_setups", "nonlin_iters", "err_test_fails", "conv_fails", "mass_kg",
+    "area_nominal_m2", "area_mesh_m2", "max_speed_m_s", "method", "iterations",
+    "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
+    "max_force_rel", NULL};
+
+int drape_cli_run_nkeys(void)
+{
+    int n = 0;
+    while (drape_cli_run_keys[n]) n++;
+    return n;
+}
+
+/* 1 if the fields are exactly drape_cli_run_keys, in order ('.' as '_'). */
+
 
 typedef struct field {
     const char *key;
@@ -70,6 +98,18 @@ typedef struct result_fields {
     field f[MAX_FIELDS];
     int n;
 } result_fields;
+
+static int fields_match_keys(const result_fields *r)
+{
+    if (r->n != drape_cli_run_nkeys()) return 0;
+    for (int i = 0; i < r->n; i++) {
+        const char *a = r->f[i].key, *b = drape_cli_run_keys[i];
+        for (; *a && *b; a++, b++)
+            if (*a != *b && !(*a == '.' && *b == '_')) return 0;
+        if (*a || *b) return 0;
+    }
+    return 1;
+}
 
 static void add_num(result_fields *r, const char *key, double v)
 {
@@ -100,7 +140,7 @@ static void print_value(FILE *out, const field *f, int json)
 {
     if (f->text) {
         if (json) json_string(out, f->text);
-        else fputs(f->text, out);
+        else drape_cli_csv_put(out, f->text);
     } else if (!isfinite(f->value) || (f->is_int && f->value < 0)) {
         fputs(json ? "null" : "", out);
     } else if (f->is_int) {
@@ -239,10 +279,55 @@ static int ensure_dir(const char *dir, drape_error *err)
     return 0;
 }
 
+/* The static method: minimise E_pot from the initial state and present the
+ * result as a run (status equilibrium or failed, no time, no integrator
+ * statistics).  Frames: the final state only.  Returns 1 on success. */
+static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
+                      drape_sim_result *res, drape_equilibrium_result *er,
+                      drape_error *err)
+{
+    const drape_lattice *L = drape_model_lattice(m);
+    drape_equilibrium_opts eo;
+    drape_equilibrium_opts_from_fabric(&eo, f);
+    snprintf(res->integrator, sizeof res->integrator, "static");
+    res->status = DRAPE_SIM_FAILED;
+    res->t_end_s = NAN;
+    /* no integrator: every counter "not available" (-1), printed as null */
+    res->stats.steps = res->stats.rhs_evals = res->stats.jac_evals = -1;
+    res->stats.lin_setups = res->stats.nonlin_iters = res->stats.err_test_fails = -1;
+    res->stats.conv_fails = res->stats.lin_iters = res->stats.lin_factors = -1;
+    res->max_speed = NAN;
+    if (drape_equilibrium_solve(m, L->xinit, &eo, er, err) != 0) return 0;
+    res->wall_s = er->wall_s;
+    res->x = er->x;
+    er->x = NULL;
+    res->v = drape_calloc((size_t)3 * (size_t)L->n, sizeof(double));
+    if (!res->v) {
+        drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+        return 0;
+    }
+    res->energy = er->energy;
+    res->kinetic_J = 0.0;
+    res->max_strain = er->max_strain;
+    res->max_speed = 0.0;
+    if (er->status != DRAPE_EQ_CONVERGED) {
+        drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                        "static equilibrium not reached (%s after %d iterations, largest "
+                        "residual force %.3g x particle weight); hint: try --method dynamic",
+                        drape_equilibrium_status_name(er->status), er->iterations,
+                        er->max_force_rel);
+        return 0;
+    }
+    res->status = DRAPE_SIM_EQUILIBRIUM;
+    drape_sim_event ev = {DRAPE_SIM_AT_END, 0.0, res->x, res->v, er->iterations, 0.0};
+    if ((rc->obj || rc->h5) && observe(rc, &ev, err) != 0) return 0;
+    return 1;
+}
+
 int drape_cli_run(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
-           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS };
+           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -253,6 +338,7 @@ int drape_cli_run(int argc, char **argv)
         {"t-max", required_argument, NULL, O_TMAX},
         {"out", required_argument, NULL, O_OUT},
         {"max-steps", required_argument, NULL, O_MAXSTEPS},
+        {"method", required_argument, NULL, O_METHOD},
         {"format", required_argument, NULL, O_FORMAT},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
@@ -261,6 +347,7 @@ int drape_cli_run(int argc, char **argv)
     double rtol = 0, atol = 0, spacing = 0, t_max = 0;
     int csv = 0, quiet = 0, c;
     long max_steps = 0;
+    int method_static = 0;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;
@@ -283,6 +370,11 @@ int drape_cli_run(int argc, char **argv)
             if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
             break;
         case O_OUT: out_dir = optarg; break;
+        case O_METHOD:
+            if (strcmp(optarg, "dynamic") == 0) method_static = 0;
+            else if (strcmp(optarg, "static") == 0) method_static = 1;
+            else return usage_error("--method: expected dynamic or static, got `%s'%s", optarg, "");
+            break;
         case O_MAXSTEPS: {
             char *end;
             errno = 0;
@@ -361,12 +453,18 @@ int drape_cli_run(int argc, char **argv)
     rc.progress = !quiet && isatty(STDERR_FILENO);
     rc.t_max = s.t_max;
 
-    drape_sim_opts so;
-    drape_sim_opts_from_scene(&s, &so);
-    so.observe_progress = rc.progress;
-    if (max_steps > 0) so.max_steps = max_steps;
-    sim_ok = drape_sim_run(m, &so, (rc.obj || rc.h5 || rc.progress) ? observe : NULL, &rc,
-                           &res, &err) == 0;
+    drape_equilibrium_result er;
+    memset(&er, 0, sizeof er);
+    if (method_static) {
+        sim_ok = run_static(m, &f, &rc, &res, &er, &err);
+    } else {
+        drape_sim_opts so;
+        drape_sim_opts_from_scene(&s, &so);
+        so.observe_progress = rc.progress;
+        if (max_steps > 0) so.max_steps = max_steps;
+        sim_ok = drape_sim_run(m, &so, (rc.obj || rc.h5 || rc.progress) ? observe : NULL, &rc,
+                               &res, &err) == 0;
+    }
     if (!sim_ok && err.kind != DRAPE_E_NUMERIC) goto fail; /* I/O or input: no result */
     if (!sim_ok) {
         drape_cli_print_error(&err);
@@ -430,6 +528,20 @@ int drape_cli_run(int argc, char **argv)
     add_num(&r, "area_nominal_m2", L->area_nominal);
     add_num(&r, "area_mesh_m2", have_dc ? sh.a_specimen_mesh_m2 : NAN);
     add_num(&r, "max_speed_m_s", res.max_speed);
+    add_str(&r, "method", method_static ? "static" : "dynamic");
+    /* static method only (null for dynamic runs) */
+    add_int(&r, "iterations", method_static ? er.iterations : NAN);
+    add_int(&r, "factorizations", method_static ? er.factorizations : NAN);
+    if (method_static && er.certified >= 0) add_str(&r, "certified", er.certified ? "minimum" : "saddle");
+    else add_num(&r, "certified", NAN);
+    add_num(&r, "min_pivot_N_m", method_static ? er.min_pivot : NAN);
+    add_num(&r, "omega_min_rad_s", method_static ? er.omega_min : NAN);
+    add_num(&r, "max_force_rel", method_static ? er.max_force_rel : NAN);
+    if (!fields_match_keys(&r)) {
+        drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                        "result fields differ from drape_cli_run_keys");
+        goto fail;
+    }
 
     if (rc.obj) { drape_obj_free(rc.obj); rc.obj = NULL; }
     if (rc.h5) {
@@ -459,6 +571,7 @@ out:
     drape_h5_discard(rc.h5);
     drape_dc_free(dc);
     drape_sim_result_free(&res);
+    drape_equilibrium_result_free(&er);
     drape_model_free(m);
     drape_lattice_free(L);
     drape_free(fabric_text);

@@ -1,5 +1,6 @@
 /* main.c: drape's command line: global options and subcommand dispatch.
  * Only the command line prints or exits (STYLE.md 6). */
+#include <dlfcn.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
@@ -61,9 +62,31 @@ void drape_cli_warn(void *ctx, const drape_error *w)
     fprintf(stderr, "drape: %swarning: %s\n", buf, w->msg);
 }
 
+/* drape is single-threaded by design: batch runs parallelise over
+ * processes.  Debian's CHOLMOD runs its supernodal factorisation in OpenMP
+ * threads and OpenBLAS starts its own; on a shared 2-core machine those
+ * threads cost more than they gain (the static Cusick solve took 0.8-1.05 s
+ * CPU with them against 0.33 s without; docs/equilibrium.md).  The runtimes
+ * read OMP_NUM_THREADS / OPENBLAS_NUM_THREADS when they load, before main,
+ * so set the thread counts through their API, looked up at run time so
+ * that drape does not link libgomp itself. */
+static void single_threaded(void)
+{
+    static const char *const names[] = {"omp_set_num_threads", "openblas_set_num_threads"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        void *sym = dlsym(RTLD_DEFAULT, names[i]);
+        if (sym) {
+            void (*set)(int);
+            memcpy(&set, &sym, sizeof set); /* object -> function pointer, POSIX */
+            set(1);
+        }
+    }
+}
+
 int main(int argc, char **argv)
 {
     gsl_set_error_handler_off(); /* GSL's default handler aborts */
+    single_threaded();
 
     static const struct option opts[] = {
         {"help", no_argument, NULL, 'h'},

@@ -178,6 +178,29 @@ START_TEST(test_output_dir_errors)
 }
 END_TEST
 
+/* The default Cusick scene by the static method: a certified minimum with
+ * the residual below its tolerance, a drape coefficient strictly between
+ * "hanging straight down" (0) and "undeformed" (1), and the potential
+ * energy below the flat state's (0: gravity is measured from z = 0). */
+START_TEST(test_cusick_static_equilibrium)
+{
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --method static", out, CAP, err,
+                                  CAP), 0);
+    ck_assert_ptr_nonnull(strstr(out, "\"status\": \"equilibrium\""));
+    ck_assert_ptr_nonnull(strstr(out, "\"certified\": \"minimum\""));
+    ck_assert_ptr_nonnull(strstr(out, "\"method\": \"static\""));
+    double dc = json_num(out, "dc");
+    ck_assert_msg(dc > 0.0 && dc < 1.0, "dc = %g", dc);
+    ck_assert(json_num(out, "max_force_rel") <= 1e-8);
+    ck_assert(json_num(out, "min_pivot_N_m") > 0);
+    double e = json_num(out, "stretch") + json_num(out, "bend") + json_num(out, "shear") +
+               json_num(out, "gravity");
+    ck_assert_msg(e < 0, "E_pot = %g J", e);
+    /* the shadow lies between the support disk (r = 9 cm) and the specimen (15 cm) */
+    ck_assert(json_num(out, "r_min_m") > 0.09 && json_num(out, "r_max_m") <= 0.15);
+}
+END_TEST
+
 Suite *run_suite(void)
 {
     Suite *s = suite_create("run");
@@ -187,6 +210,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_failure_is_clean);
     tcase_add_test(tc, test_frames_parse_back);
     tcase_add_test(tc, test_output_dir_errors);
+    tcase_add_test(tc, test_cusick_static_equilibrium);
     suite_add_tcase(s, tc);
     return s;
 }

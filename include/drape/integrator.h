@@ -58,7 +58,36 @@ typedef struct drape_integrator_opts {
     long max_steps;     /* steps allowed per step_to call; 0 = default */
     double dense_limit_bytes; /* gsl-msbdf refuses above this; 0 = default */
     double h_init;      /* first step, s; 0 = solver's own choice (GSL: default above) */
+    int linsol;         /* drape_linsol: Newton linear solver of the SUNDIALS
+                           implicit backends; 0 = DRAPE_LINSOL_AUTO */
 } drape_integrator_opts;
+
+/* Linear solver of the Newton systems (I - gamma J) dy = r of cvode-bdf,
+ * arkode-dirk and arkode-imex (docs/integrators.md, "Linear solvers"):
+ *   klu           sparse LU (KLU, AMD ordering) of the 6 nf first-order
+ *                 matrix, refactored only when J or gamma changed;
+ *   schur         GMRES (SUNDIALS SPGMR, left preconditioning) with the
+ *                 Schur-reduced 3 nf system S = M - gamma D - gamma^2 K
+ *                 factored by CHOLMOD as preconditioner (numerics.md 3.3)
+ *                 and the exact J*v from the model's K and D;
+ *   schur-direct  the same Schur solve applied once per Newton iteration
+ *                 (no Krylov iteration): the modified Newton iteration of
+ *                 klu with a cheaper factorisation;
+ *   auto          schur-direct when 3 nf >= DRAPE_LINSOL_SCHUR_MIN_NF3,
+ *                 klu below (measured crossover). */
+typedef enum drape_linsol {
+    DRAPE_LINSOL_AUTO = 0,
+    DRAPE_LINSOL_KLU = 1,
+    DRAPE_LINSOL_SCHUR = 2,
+    DRAPE_LINSOL_SCHUR_DIRECT = 3
+} drape_linsol;
+#define DRAPE_LINSOL_SCHUR_MIN_NF3 450L /* 150 free particles (docs/integrators.md) */
+
+/* "auto", "klu", "schur", "schur-direct" -> *out; 0, or -1 for an unknown
+ * name.  (Implemented in src/linsol_schur.c.) */
+int drape_linsol_parse(const char *name, int *out);
+/* Name of a drape_linsol value (as parsed above), "none" otherwise. */
+const char *drape_linsol_name(int linsol);
 
 /* Fill o with the defaults: rtol 1e-4, atol 1e-7 m, everything else 0
  * (= the documented default). */
@@ -71,6 +100,12 @@ void drape_integrator_opts_default(drape_integrator_opts *o);
 typedef struct drape_integrator_stats {
     long steps, rhs_evals, jac_evals, lin_setups, nonlin_iters, err_test_fails,
         conv_fails;
+    long lin_iters; /* Krylov iterations (linsol schur); 0 for direct solvers */
+    long lin_factors; /* numeric factorisations: lin_setups minus the setups
+                         that found J and gamma unchanged and kept the factor
+                         (SUNDIALS backends; 0 = not counted) */
+    int linsol;     /* drape_linsol in use (KLU or SCHUR); 0 = none (explicit,
+                       GSL's dense LU) */
 } drape_integrator_stats;
 
 /* ---- Backend interface --------------------------------------------------

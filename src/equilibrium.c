@@ -1,0 +1,905 @@
+/* equilibrium.c: the static drape by energy minimisation (equilibrium.h;
+ * numerics.md 3.7; MODEL.md 3, 4, 6).
+ *
+ * Unknowns: the 3 nf free coordinates y.  E(y) = E_pot (MODEL 3: stretch,
+ * bend, shear, gravity), F = -grad E = the conservative force (MODEL 4),
+ * H = Hess E = -K (K = dF/dy from drape_model_jacobian, exact and
+ * symmetric; unclamped: compressed springs, concave fit pieces and buckling
+ * make it indefinite away from a minimum), M = lumped masses (diagonal).
+ *
+ * (E1) pseudo-transient continuation (PTC): a backward Euler step of
+ *      M y'' = F started from rest, velocity discarded after the step
+ *      (fully damped implicit dynamics), linearised:
+ *          (M / dt^2 + Hc) dy = F(y),   y <- y + alpha dy
+ *      Hc = H with compressed springs clamped (E8) when the fabric's k is
+ *      given, else H.  If M/dt^2 + Hc is not positive definite (LL^T
+ *      fails), dt <- dt/2.  For small dt the step is dt^2 M^-1 F (the
+ *      physical fall); as dt grows it becomes Newton's method.  lambda =
+ *      1/dt^2 is a Levenberg-Marquardt shift with the mass matrix as
+ *      metric, so the iteration cannot jump across the basin the way
+ *      undamped Newton from the flat state can (numerics 3.7 pitfall 1).
+ * (E2) switched evolution relaxation (Mulder & van Leer 1985; Kelley &
+ *      Keyes 1998) on the mass-weighted residual r = ||M^-1 F||_2, after a
+ *      full step (alpha = 1):
+ *          dt_{k+1} = dt_k * clamp(r_{k-1} / r_k, g_min, g_max)
+ *      g_min > 1 keeps dt growing while the residual is flat (the cloth is
+ *      still falling: gravity unbalanced); after a shortened step
+ *      dt_{k+1} = dt_k sqrt(alpha) (the step of a small dt is ~ dt^2).
+ * (E3) line search: Armijo, E(y + alpha dy) <= E(y) - c alpha F.dy, alpha
+ *      = 1, 1/2, ... (DRAPE_EQ_LS_PTC halvings in PTC, DRAPE_EQ_LS_MAX in
+ *      Newton).  dy is a descent direction whenever the matrix is positive
+ *      definite.  Once dt > dt_newton: Newton, H dy = F with the exact H;
+ *      if H is not positive definite, Hc (modified Newton, kept for
+ *      DRAPE_EQ_EXACT_RETRY iterations before H is tried again); if neither
+ *      factorises or the line search fails, back to PTC at dt_newton/4.
+ * (E4) convergence: |F_i| <= tol * w_i for every free particle i
+ *      (w_i = m_i g, the particle's weight, or force_ref).
+ * (E5) eps_E = DRAPE_EQ_EPS_E * sum of |energy terms|: E is a sum of
+ *      O(n) terms and its rounding error is about that big; a step whose
+ *      energy change is within it is accepted only if it lowers
+ *      ||M^-1 F||.  A full Newton step that changes E by less than eps_E
+ *      without lowering the residual means the roundoff floor: stop
+ *      (status stalled).
+ * (E6) certification: LL^T of the exact H at the solution (no shift, no
+ *      clamping).  Success <=> H positive definite <=> strict local
+ *      minimum.  min pivot d_min = min_i L_ii^2 (N/m): every pivot of a
+ *      symmetric positive definite matrix is >= lambda_min(H), so d_min is
+ *      an upper bound on lambda_min, not a lower one.  The physical margin
+ *      is the lowest natural frequency omega_min^2 = lambda_min(M^-1 H),
+ *      from inverse iteration v <- H^-1 M v with the Rayleigh quotient
+ *          rho(v) = v^T M u / u^T M u,  u = H^-1 M v
+ *      (= u^T H u / u^T M u, an upper bound on lambda_min).
+ * (E8) clamping (Choi & Ko 2002; numerics 3.2): a spring of stiffness k w
+ *      shorter than sigma has the negative transverse stiffness
+ *      k w (1 - sigma/l)(I - u u^T); Hc drops it.  Compressed springs are
+ *      everywhere in a drape (the hem must shorten to fall), and their
+ *      negative curvature otherwise forces lambda >> the slow modes'
+ *      stiffness: measured 234 -> 88 iterations on the Cusick scene.
+ * (E9) optional damped dynamics before (E1): see damped_dynamics().
+ *
+ * CHOLMOD: the model's CSC pattern (full, both triangles, diagonal stored)
+ * is given to cholmod_l with stype = -1, so only the lower triangle is
+ * read; cholmod_l_analyze once (fill-reducing ordering; simplicial up to
+ * DRAPE_EQ_SIMPLICIAL_MAX_N unknowns, else CHOLMOD's choice),
+ * cholmod_l_factorize (numeric only) per iteration, cholmod_l_solve2 with
+ * its workspaces kept.  Nothing else is allocated inside the loop.
+ *
+ * References: C. T. Kelley and D. E. Keyes, "Convergence analysis of
+ * pseudo-transient continuation", SIAM J. Numer. Anal. 35 (1998) 508-523;
+ * W. A. Mulder and B. van Leer, J. Comput. Phys. 59 (1985) 232-246 (SER);
+ * J. Nocedal and S. J. Wright, Numerical Optimization, 2nd ed. (2006),
+ * sections 3.1-3.4 (line search, Hessian modification);
+ * Y. Chen, T. A. Davis, W. W. Hager, S. Rajamanickam, "Algorithm 887:
+ * CHOLMOD", ACM TOMS 35 (2008); numerics.md 3.2, 3.3, 3.7.
+ */
+#include "drape/equilibrium.h"
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include <time.h>
+
+#include <cholmod.h>
+
+#include "drape/alloc.h"
+
+/* (E5): energy noise, in units of the sum of |terms|. */
+#define DRAPE_EQ_EPS_E (1e3 * DBL_EPSILON)
+/* (E3): line-search halvings before a step is refused: Newton (then PTC
+ * takes over), PTC (then dt is halved), and Armijo's constant. */
+#define DRAPE_EQ_LS_MAX 8
+#define DRAPE_EQ_LS_PTC 2
+#define DRAPE_EQ_ARMIJO 1e-4
+/* (E3): Newton iterations that use Hc after the exact H failed to
+ * factorise, before the exact H is tried again. */
+#define DRAPE_EQ_EXACT_RETRY 3
+/* (E1): dt below dt0 times this means the iteration has collapsed. */
+#define DRAPE_EQ_DT_COLLAPSE 1e-8
+/* (E6): inverse iteration stops when rho changes by less than this. */
+#define DRAPE_EQ_EIG_RTOL 1e-8
+
+/* Unknowns up to which CHOLMOD factorises simplicially (measured: equal
+ * speed at 1368 unknowns, supernodal 1.6-2x faster at 5400-7000 on one
+ * thread). */
+#define DRAPE_EQ_SIMPLICIAL_MAX_N 3000
+
+#define PARTS_POT (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | \
+                   DRAPE_PART_GRAVITY)
+
+void drape_equilibrium_opts_default(drape_equilibrium_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->tol = 1e-8;
+    o->max_iters = 500;
+    o->dt0 = 0.0;
+    o->dt_growth_max = 4.0;
+    o->dt_growth_min = 1.5;
+    o->dt_newton = 0.0;
+    o->certify = 1;
+    o->eig_iters = 40;
+    o->force_ref = 0.0;
+    o->trace = NULL;
+    o->trace_ctx = NULL;
+}
+
+void drape_equilibrium_opts_from_fabric(drape_equilibrium_opts *o, const drape_fabric *f)
+{
+    drape_equilibrium_opts_default(o);
+    o->clamp_k[DRAPE_WEFT] = f->k[DRAPE_WEFT];
+    o->clamp_k[DRAPE_WARP] = f->k[DRAPE_WARP];
+}
+
+const char *drape_equilibrium_status_name(drape_equilibrium_status s)
+{
+    switch (s) {
+    case DRAPE_EQ_CONVERGED: return "converged";
+    case DRAPE_EQ_MAX_ITERS: return "max_iters";
+    case DRAPE_EQ_STALLED: return "stalled";
+    }
+    return "stalled";
+}
+
+void drape_equilibrium_result_free(drape_equilibrium_result *r)
+{
+    if (!r) return;
+    drape_free(r->x);
+    r->x = NULL;
+}
+
+/* ------------------------------------------------------------ workspace */
+
+typedef struct eq_work {
+    drape_model *m;
+    const drape_lattice *L;
+    unsigned parts;        /* conservative parts the model has */
+    int nf;
+    long N;                /* 3 nf */
+    const drape_pattern *pat;
+    double *K;             /* nnz: K = dF/dy */
+    double *Kc;            /* nnz: clamp correction (E8), added to K when asked */
+    long *dpos;            /* N: slot of the diagonal entry of each column */
+    double *mrow;          /* N: mass of the coordinate's particle */
+    double *wref;          /* nf: reference force of each free particle */
+    double *xt, *xz;       /* 3n: trial positions; xz: scratch of the dynamics */
+    double *f, *ft, *fz;   /* 3n: forces at x and xt; fz: scratch of the dynamics */
+    double *dy;            /* N: step */
+    double *rhs, *rch;     /* N: F(y) (free part); right side of the dynamics */
+    double *v, *u;         /* N: inverse iteration */
+    double *D, *vel, *fd;  /* damped dynamics: nnz, 3n, 3n */
+    long *eslot;           /* 4 per edge: slots of blocks (a,a),(b,b),(a,b),(b,a) or -1 */
+    double kclamp[2];      /* N/m per direction; 0 = no clamping */
+    cholmod_common c;
+    int c_started;
+    cholmod_sparse *A;
+    cholmod_factor *LF;
+    cholmod_dense *B, *X, *Y, *E;
+    drape_equilibrium_result *r;
+} eq_work;
+
+static double clock_s(clockid_t id)
+{
+    struct timespec ts;
+    clock_gettime(id, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double energy_sum(const drape_energies *E)
+{
+    return E->stretch + E->bend + E->shear + E->gravity;
+}
+
+static double energy_abs(const drape_energies *E)
+{
+    return fabs(E->stretch) + fabs(E->bend) + fabs(E->shear) + fabs(E->gravity);
+}
+
+/* E_pot at x; 1 if the model cannot evaluate it (folded) or it is not
+ * finite. */
+static int eval_energy(eq_work *w, const double *x, drape_energies *E)
+{
+    w->r->energy_evals++;
+    if (drape_model_energy(w->m, x, E) != 0) return 1;
+    return isfinite(energy_sum(E)) ? 0 : 1;
+}
+
+static int eval_forces(eq_work *w, const double *x, double *f)
+{
+    w->r->force_evals++;
+    return drape_model_forces(w->m, w->parts, x, NULL, f) != 0;
+}
+
+/* max_i |F_i| / w_i over free particles. */
+static double force_rel(const eq_work *w, const double *f)
+{
+    double mx = 0.0;
+    for (int p = 0; p < w->nf; p++) {
+        const double *fi = f + 3 * (long)w->L->free_to_id[p];
+        double a = sqrt(fi[0] * fi[0] + fi[1] * fi[1] + fi[2] * fi[2]) / w->wref[p];
+        if (!(a <= mx)) mx = a; /* NaN propagates */
+    }
+    return mx;
+}
+
+/* ||M^-1 F||_2 over free coordinates (E2). */
+static double accel_norm(const eq_work *w, const double *f)
+{
+    double s = 0.0;
+    for (int p = 0; p < w->nf; p++) {
+        const double *fi = f + 3 * (long)w->L->free_to_id[p];
+        double im = 1.0 / w->mrow[3 * p];
+        s += (fi[0] * fi[0] + fi[1] * fi[1] + fi[2] * fi[2]) * im * im;
+    }
+    return sqrt(s);
+}
+
+static double min_pivot(const cholmod_factor *F);
+
+/* A = -(K + Kc) + lambda M, Kc only if clamp (the lower triangle is what
+ * CHOLMOD reads). */
+static void assemble(eq_work *w, double lambda, int clamp)
+{
+    double *ax = w->A->x;
+    if (clamp && w->Kc)
+        for (long k = 0; k < w->pat->nnz; k++) ax[k] = -w->K[k] - w->Kc[k];
+    else
+        for (long k = 0; k < w->pat->nnz; k++) ax[k] = -w->K[k];
+    if (lambda > 0.0)
+        for (long j = 0; j < w->N; j++) ax[w->dpos[j]] += lambda * w->mrow[j];
+}
+
+/* Numeric factorisation of A.  1: positive definite, 0: not, -1: error. */
+static int factorize(eq_work *w, drape_error *err)
+{
+    w->r->factorizations++;
+    int ok = cholmod_l_factorize(w->A, w->LF, &w->c);
+    if (w->c.status == CHOLMOD_NOT_POSDEF) return 0;
+    if (!ok || w->c.status < CHOLMOD_OK) {
+        drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                        "equilibrium: CHOLMOD factorisation failed (status %d)",
+                        w->c.status);
+        return -1;
+    }
+    if (w->LF->minor != (size_t)w->N) return 0;
+    /* an LDL^T factor (CHOLMOD may keep one) does not fail on negative
+     * pivots: check them */
+    return w->LF->is_ll || min_pivot(w->LF) > 0.0 ? 1 : 0;
+}
+
+/* dy = A^-1 rhs (N numbers). */
+static int solve(eq_work *w, const double *rhs, double *out, drape_error *err)
+{
+    memcpy(w->B->x, rhs, sizeof(double) * (size_t)w->N);
+    if (!cholmod_l_solve2(CHOLMOD_A, w->LF, w->B, NULL, &w->X, NULL, &w->Y, &w->E,
+                          &w->c)) {
+        return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                               "equilibrium: CHOLMOD solve failed (status %d)",
+                               w->c.status);
+    }
+    memcpy(out, w->X->x, sizeof(double) * (size_t)w->N);
+    return 0;
+}
+
+/* Free coordinates of a full force array into rhs (N). */
+static void gather(const eq_work *w, const double *full, double *free_part)
+{
+    for (int p = 0; p < w->nf; p++) {
+        const double *s = full + 3 * (long)w->L->free_to_id[p];
+        free_part[3 * p] = s[0];
+        free_part[3 * p + 1] = s[1];
+        free_part[3 * p + 2] = s[2];
+    }
+}
+
+/* xt = x + alpha dy on free particles (fixed ones copied); returns the
+ * largest particle displacement. */
+static double trial_point(const eq_work *w, const double *x, double alpha,
+                          double *xt)
+{
+    double mx = 0.0;
+    memcpy(xt, x, sizeof(double) * 3 * (size_t)w->L->n);
+    for (int p = 0; p < w->nf; p++) {
+        double *t = xt + 3 * (long)w->L->free_to_id[p];
+        double d2 = 0.0;
+        for (int c = 0; c < 3; c++) {
+            double d = alpha * w->dy[3 * p + c];
+            t[c] += d;
+            d2 += d * d;
+        }
+        if (d2 > mx) mx = d2;
+    }
+    return sqrt(mx);
+}
+
+/* Smallest pivot L_ii^2 (LL^T) or D_ii (LDL^T) of the factor. */
+static double min_pivot(const cholmod_factor *F)
+{
+    double mn = INFINITY;
+    const double *x = F->x;
+    if (F->is_super) {
+        const long *super = F->super, *pi = F->pi, *px = F->px;
+        for (size_t s = 0; s < F->nsuper; s++) {
+            long k1 = super[s], k2 = super[s + 1];
+            long nsrow = pi[s + 1] - pi[s];
+            for (long j = 0; j < k2 - k1; j++) {
+                double d = x[px[s] + j * nsrow + j];
+                d = d * d;
+                if (d < mn) mn = d;
+            }
+        }
+    } else {
+        const long *p = F->p;
+        for (size_t j = 0; j < F->n; j++) {
+            double d = x[p[j]];
+            if (F->is_ll) d = d * d;
+            if (d < mn) mn = d;
+        }
+    }
+    return mn;
+}
+
+/* Lowest eigenvalue of H v = lambda M v by inverse iteration with the
+ * factor of H in w->LF (E6).  Returns the Rayleigh quotient. */
+static int lowest_mode(eq_work *w, int iters, double *lam, drape_error *err)
+{
+    long N = w->N;
+    /* deterministic start with every component present (no symmetry) */
+    unsigned long s = 88172645463325252ul;
+    for (long j = 0; j < N; j++) {
+        s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+        w->v[j] = (double)(s % 2000001ul) / 1e6 - 1.0 + 1e-3;
+    }
+    double rho = NAN, prev = NAN;
+    for (int it = 0; it < iters; it++) {
+        for (long j = 0; j < N; j++) w->u[j] = w->mrow[j] * w->v[j];
+        if (solve(w, w->u, w->u, err) != 0) return -1;
+        double num = 0.0, den = 0.0;
+        for (long j = 0; j < N; j++) {
+            num += w->v[j] * w->mrow[j] * w->u[j];
+            den += w->u[j] * w->mrow[j] * w->u[j];
+        }
+        if (!(den > 0.0)) break;
+        rho = num / den;
+        double sc = 1.0 / sqrt(den);
+        for (long j = 0; j < N; j++) w->v[j] = w->u[j] * sc;
+        if (it > 0 && fabs(rho - prev) <= DRAPE_EQ_EIG_RTOL * fabs(rho)) break;
+        prev = rho;
+    }
+    *lam = rho;
+    return 0;
+}
+
+/* Slot of entry (3p, 3q) of the pattern (block row p, block column q),
+ * or -1. */
+static long block_slot(const drape_pattern *P, int p, int q)
+{
+    int64_t j = 3 * (int64_t)q, row = 3 * (int64_t)p;
+    int64_t lo = P->colptr[j], hi = P->colptr[j + 1] - 1;
+    while (lo <= hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (P->rowind[mid] == row) return (long)mid;
+        if (P->rowind[mid] < row) lo = mid + 1;
+        else hi = mid - 1;
+    }
+    return -1;
+}
+
+/* (E8) Kc = -c (I - u u^T) on blocks aa, bb and +c (I - u u^T) on ab, ba
+ * for every compressed edge (l < sigma), c = k w (sigma/l - 1): adding Kc
+ * to K removes the negative geometric stiffness of compressed springs
+ * from the iteration matrix (Choi & Ko 2002): H - Kc >= H. */
+static void clamp_compressed(eq_work *w, const double *x)
+{
+    memset(w->Kc, 0, sizeof(double) * (size_t)w->pat->nnz);
+    const drape_lattice *L = w->L;
+    const drape_pattern *P = w->pat;
+    double sg = L->sigma;
+    for (int e = 0; e < L->n_edges; e++) {
+        const drape_edge *ed = &L->edges[e];
+        const long *sl = w->eslot + 4 * (long)e;
+        double d[3], u[3];
+        for (int k = 0; k < 3; k++) d[k] = x[3 * ed->b + k] - x[3 * ed->a + k];
+        double l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(l < sg) || !(l > 0.0)) continue;
+        double c = w->kclamp[ed->dir] * ed->weight * (sg / l - 1.0);
+        for (int k = 0; k < 3; k++) u[k] = d[k] / l;
+        for (int blk = 0; blk < 4; blk++) {
+            if (sl[blk] < 0) continue;
+            int q = blk == 0 ? L->free_id[ed->a] : blk == 1 ? L->free_id[ed->b]
+                  : blk == 2 ? L->free_id[ed->b] : L->free_id[ed->a];
+            int64_t stride = P->colptr[3 * (int64_t)q + 1] - P->colptr[3 * (int64_t)q];
+            double sgn = blk < 2 ? -1.0 : 1.0;
+            for (int cc = 0; cc < 3; cc++)
+                for (int rr = 0; rr < 3; rr++)
+                    w->Kc[sl[blk] + cc * stride + rr] +=
+                        sgn * c * ((rr == cc ? 1.0 : 0.0) - u[rr] * u[cc]);
+        }
+    }
+}
+
+static int work_init(eq_work *w, drape_model *m, drape_error *err)
+{
+    const drape_lattice *L = drape_model_lattice(m);
+    w->m = m;
+    w->L = L;
+    w->parts = drape_model_parts(m) & PARTS_POT;
+    w->nf = L->n_free;
+    w->N = 3 * (long)L->n_free;
+    w->pat = drape_model_pattern(m);
+    size_t N1 = (size_t)(w->N > 0 ? w->N : 1);
+    size_t n3 = 3 * (size_t)(L->n > 0 ? L->n : 1);
+    size_t nnz = (size_t)(w->pat->nnz > 0 ? w->pat->nnz : 1);
+    w->K = drape_malloc(sizeof(double) * nnz);
+    w->dpos = drape_malloc(sizeof(long) * N1);
+    w->mrow = drape_malloc(sizeof(double) * N1);
+    w->wref = drape_malloc(sizeof(double) * (size_t)(w->nf > 0 ? w->nf : 1));
+    w->xt = drape_malloc(sizeof(double) * n3);
+    w->xz = drape_malloc(sizeof(double) * n3);
+    w->f = drape_malloc(sizeof(double) * n3);
+    w->ft = drape_malloc(sizeof(double) * n3);
+    w->fz = drape_malloc(sizeof(double) * n3);
+    w->dy = drape_malloc(sizeof(double) * N1);
+    w->D = drape_malloc(sizeof(double) * nnz);
+    w->vel = drape_calloc(n3, sizeof(double));
+    w->fd = drape_malloc(sizeof(double) * n3);
+    w->rhs = drape_malloc(sizeof(double) * N1);
+    w->rch = drape_malloc(sizeof(double) * N1);
+    w->v = drape_malloc(sizeof(double) * N1);
+    w->u = drape_malloc(sizeof(double) * N1);
+    if (!w->K || !w->dpos || !w->mrow || !w->wref || !w->xt || !w->xz || !w->f || !w->ft || !w->fz ||
+        !w->dy || !w->D || !w->vel || !w->fd || !w->rhs || !w->rch || !w->v || !w->u)
+        goto nomem;
+    for (int p = 0; p < w->nf; p++)
+        for (int c = 0; c < 3; c++) w->mrow[3 * p + c] = L->mass[L->free_to_id[p]];
+    for (long j = 0; j < w->N; j++) {
+        w->dpos[j] = -1;
+        for (int64_t k = w->pat->colptr[j]; k < w->pat->colptr[j + 1]; k++)
+            if (w->pat->rowind[k] == j) w->dpos[j] = (long)k;
+        if (w->dpos[j] < 0)
+            return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                                   "equilibrium: the model pattern lacks diagonal %ld", j);
+    }
+    if (w->kclamp[0] > 0.0 || w->kclamp[1] > 0.0) {
+        w->eslot = drape_malloc(sizeof(long) * 4 * (size_t)(L->n_edges > 0 ? L->n_edges : 1));
+        w->Kc = drape_malloc(sizeof(double) * nnz);
+        if (!w->eslot || !w->Kc) goto nomem;
+        for (int e = 0; e < L->n_edges; e++) {
+            int pa = L->free_id[L->edges[e].a], pb = L->free_id[L->edges[e].b];
+            long *sl = w->eslot + 4 * (long)e;
+            sl[0] = pa >= 0 ? block_slot(w->pat, pa, pa) : -1;
+            sl[1] = pb >= 0 ? block_slot(w->pat, pb, pb) : -1;
+            sl[2] = pa >= 0 && pb >= 0 ? block_slot(w->pat, pa, pb) : -1; /* row a, col b */
+            sl[3] = pa >= 0 && pb >= 0 ? block_slot(w->pat, pb, pa) : -1;
+        }
+    }
+    if (w->N == 0) return 0;
+
+    cholmod_l_start(&w->c);
+    w->c_started = 1;
+    w->c.print = 0;              /* library code never prints */
+    w->c.error_handler = NULL;
+    w->c.quick_return_if_not_posdef = 1;
+    w->c.final_ll = 1;           /* simplicial: LL^T, which fails when not PD */
+    /* small systems: simplicial, which uses neither BLAS nor OpenMP (the
+     * supernodal kernels of Debian's CHOLMOD start 4 OpenMP threads
+     * whatever OMP_NUM_THREADS says, which costs more than it gains here) */
+    if (w->N <= DRAPE_EQ_SIMPLICIAL_MAX_N) w->c.supernodal = CHOLMOD_SIMPLICIAL;
+    w->A = cholmod_l_allocate_sparse((size_t)w->N, (size_t)w->N, nnz, 1, 1, -1,
+                                     CHOLMOD_REAL, &w->c);
+    w->B = cholmod_l_allocate_dense((size_t)w->N, 1, (size_t)w->N, CHOLMOD_REAL, &w->c);
+    if (!w->A || !w->B) goto nomem;
+    long *ap = w->A->p, *ai = w->A->i;
+    for (long j = 0; j <= w->N; j++) ap[j] = (long)w->pat->colptr[j];
+    for (int64_t k = 0; k < w->pat->nnz; k++) ai[k] = (long)w->pat->rowind[k];
+    /* values for the analysis are irrelevant; make them finite */
+    memset(w->A->x, 0, sizeof(double) * nnz);
+    w->LF = cholmod_l_analyze(w->A, &w->c);
+    if (!w->LF) {
+        if (w->c.status == CHOLMOD_OUT_OF_MEMORY) goto nomem;
+        return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                               "equilibrium: CHOLMOD analysis failed (status %d)",
+                               w->c.status);
+    }
+    return 0;
+nomem:
+    return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL,
+                           "out of memory in the equilibrium solver (%ld unknowns)",
+                           w->N);
+}
+
+static void work_free(eq_work *w)
+{
+    if (w->c_started) {
+        cholmod_l_free_factor(&w->LF, &w->c);
+        cholmod_l_free_sparse(&w->A, &w->c);
+        cholmod_l_free_dense(&w->B, &w->c);
+        cholmod_l_free_dense(&w->X, &w->c);
+        cholmod_l_free_dense(&w->Y, &w->c);
+        cholmod_l_free_dense(&w->E, &w->c);
+        cholmod_l_finish(&w->c);
+    }
+    drape_free(w->K);
+    drape_free(w->dpos);
+    drape_free(w->mrow);
+    drape_free(w->wref);
+    drape_free(w->xt);
+    drape_free(w->xz);
+    drape_free(w->f);
+    drape_free(w->ft);
+    drape_free(w->fz);
+    drape_free(w->eslot);
+    drape_free(w->Kc);
+    drape_free(w->dy);
+    drape_free(w->D);
+    drape_free(w->vel);
+    drape_free(w->fd);
+    drape_free(w->rhs);
+    drape_free(w->rch);
+    drape_free(w->v);
+    drape_free(w->u);
+}
+
+/* (E9) Damped implicit dynamics: M x'' = f(x, v) (all of the model's
+ * parts, its damping included) from rest, by linearly implicit BDF2 with
+ * fixed step h (BDF1 = backward Euler for the first step and after a
+ * refused factorisation):
+ *     x_{n+1} = xh + b h v_{n+1},  M (v_{n+1} - vh) = b h f(x_{n+1}, v_{n+1})
+ *     BDF1: xh = x_n, vh = v_n, b = 1;
+ *     BDF2: xh = (4 x_n - x_{n-1})/3, vh = (4 v_n - v_{n-1})/3, b = 2/3,
+ * one Newton iteration from v = v_n (x0 = xh + b h v_n):
+ *     (M - b h D - (b h)^2 K) dv = M (vh - v_n) + b h f(x0, v_n),
+ * K, D at (x0, v_n).  Runs for time T (it follows the physical fall, with
+ * inertia, into the basin that the dynamic run would reach). */
+static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps,
+                           drape_error *err)
+{
+    unsigned parts_all = drape_model_parts(w->m);
+    const drape_lattice *L = w->L;
+    const drape_pattern *P = w->pat;
+    size_t n3 = 3 * (size_t)L->n;
+    double *xp = w->xz, *vp = w->fz, *x0 = w->xt, *v = w->vel;  /* previous step, trial */
+    memset(v, 0, sizeof(double) * n3);
+    double t = 0.0;
+    int have_prev = 0;
+    *steps = 0;
+    while (t < T * (1.0 - 1e-12)) {
+        double hs = h < T - t ? h : T - t;
+        int bdf2 = have_prev;
+        double b = bdf2 ? 2.0 / 3.0 : 1.0, bh = b * hs;
+        /* predictor x0 = xh + b h v_n; the free part of M (vh - v_n) */
+        memcpy(x0, x, sizeof(double) * n3);
+        for (int p = 0; p < w->nf; p++) {
+            long k = 3 * (long)L->free_to_id[p];
+            for (int c = 0; c < 3; c++) {
+                double xh = bdf2 ? (4.0 * x[k + c] - xp[k + c]) / 3.0 : x[k + c];
+                double vh = bdf2 ? (4.0 * v[k + c] - vp[k + c]) / 3.0 : v[k + c];
+                x0[k + c] = xh + bh * v[k + c];
+                w->rch[3 * p + c] = w->mrow[3 * p] * (vh - v[k + c]);
+            }
+        }
+        w->r->force_evals++;
+        w->r->jacobian_evals++;
+        if (drape_model_forces(w->m, parts_all, x0, v, w->fd) != 0 ||
+            drape_model_jacobian(w->m, parts_all, x0, v, w->K, w->D) != 0) {
+            if (h < 1e-6 * T) return 1;
+            h *= 0.5;
+            have_prev = 0;
+            continue;
+        }
+        if (w->eslot) clamp_compressed(w, x0);
+        double *ax = w->A->x;
+        for (int64_t k = 0; k < P->nnz; k++)
+            ax[k] = -bh * w->D[k] - bh * bh * (w->K[k] + (w->Kc ? w->Kc[k] : 0.0));
+        for (long j = 0; j < w->N; j++) ax[w->dpos[j]] += w->mrow[j];
+        int pd = factorize(w, err);
+        if (pd < 0) return -1;
+        if (pd == 0) { /* too long a step for the negative curvature */
+            if (h < 1e-6 * T) return 1;
+            h *= 0.5;
+            have_prev = 0;
+            continue;
+        }
+        for (int p = 0; p < w->nf; p++) {
+            long k = 3 * (long)L->free_to_id[p];
+            for (int c = 0; c < 3; c++) w->rch[3 * p + c] += bh * w->fd[k + c];
+        }
+        if (solve(w, w->rch, w->dy, err) != 0) return -1;
+        /* shift history, update */
+        memcpy(xp, x, sizeof(double) * n3);
+        memcpy(vp, v, sizeof(double) * n3);
+        for (int p = 0; p < w->nf; p++) {
+            long k = 3 * (long)L->free_to_id[p];
+            for (int c = 0; c < 3; c++) {
+                v[k + c] += w->dy[3 * p + c];
+                x[k + c] = x0[k + c] + bh * w->dy[3 * p + c];
+            }
+        }
+        have_prev = hs == h;
+        t += hs;
+        (*steps)++;
+    }
+    return 0;
+}
+
+/* The iterate x may live in a trial buffer after the swaps of the loop:
+ * copy it into r->x and give r->x's buffer back to the workspace. */
+static double *iterate_home(eq_work *w, double *x)
+{
+    double *rx = w->r->x;
+    if (x == rx) return rx;
+    memcpy(rx, x, sizeof(double) * 3 * (size_t)w->L->n);
+    if (w->xt == rx) w->xt = x;
+    else w->xz = x;
+    return rx;
+}
+
+static void trace(const drape_equilibrium_opts *o, int iter, int newton, double dt,
+                  int posdef, int accepted, double alpha, double E, double frel,
+                  double step)
+{
+    if (!o->trace) return;
+    drape_equilibrium_iter it = {iter, newton, dt, posdef, accepted, alpha, E, frel, step};
+    o->trace(o->trace_ctx, &it);
+}
+
+/* ------------------------------------------------------------------ solve */
+
+int drape_equilibrium_solve(drape_model *m, const double *x0,
+                            const drape_equilibrium_opts *opts,
+                            drape_equilibrium_result *r, drape_error *err)
+{
+    double t_start = clock_s(CLOCK_MONOTONIC);
+    double c_start = clock_s(CLOCK_PROCESS_CPUTIME_ID);
+    drape_equilibrium_opts o;
+    if (opts) o = *opts;
+    else drape_equilibrium_opts_default(&o);
+    memset(r, 0, sizeof *r);
+    r->status = DRAPE_EQ_STALLED;
+    r->certified = -1;
+    r->not_posdef_column = -1;
+    r->min_pivot = NAN;
+    r->omega_min = NAN;
+    r->max_force_rel = NAN;
+    r->energy_J = NAN;
+
+    eq_work w;
+    memset(&w, 0, sizeof w);
+    double *x = NULL; /* the iterate: r->x or one of the trial buffers */
+    w.r = r;
+    w.kclamp[0] = o.clamp_k[0];
+    w.kclamp[1] = o.clamp_k[1];
+    int rc = -1;
+    const drape_lattice *L = drape_model_lattice(m);
+
+    if (!(o.tol > 0.0) || o.max_iters < 1 || !(o.clamp_k[0] >= 0.0) ||
+        !(o.clamp_k[1] >= 0.0) || !isfinite(o.clamp_k[0]) || !isfinite(o.clamp_k[1]) ||
+        !(o.dyn_time >= 0.0) || !isfinite(o.dyn_time) ||
+        (o.dyn_time > 0.0 && !(o.dyn_dt > 0.0 && isfinite(o.dyn_dt))) || !(o.dt0 >= 0.0) ||
+        !(o.dt_growth_max >= 1.0) || !(o.dt_growth_min >= 1.0) ||
+        o.dt_growth_min > o.dt_growth_max || !(o.dt_newton >= 0.0) ||
+        o.eig_iters < 0 || !(o.force_ref >= 0.0) || !isfinite(o.force_ref) ||
+        !isfinite(o.dt0) || !isfinite(o.dt_newton)) {
+        return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, NULL,
+                               "equilibrium: bad options (tol %g, max_iters %d, dt0 %g, "
+                               "growth %g..%g, dt_newton %g, eig_iters %d, force_ref %g)",
+                               o.tol, o.max_iters, o.dt0, o.dt_growth_min,
+                               o.dt_growth_max, o.dt_newton, o.eig_iters, o.force_ref);
+    }
+    r->x = drape_malloc(sizeof(double) * 3 * (size_t)(L->n > 0 ? L->n : 1));
+    if (!r->x) {
+        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL,
+                               "out of memory in the equilibrium solver");
+    }
+    memcpy(r->x, x0, sizeof(double) * 3 * (size_t)L->n);
+    for (long k = 0; k < 3 * (long)L->n; k++) {
+        if (!isfinite(x0[k])) {
+            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                            "equilibrium: non-finite start position %ld", k);
+            goto out;
+        }
+    }
+    x = r->x;
+    if (work_init(&w, m, err) != 0) goto out;
+
+    /* reference forces w_i: the weight from the gravity part, or force_ref */
+    double g = 0.0;
+    if (w.parts & DRAPE_PART_GRAVITY) {
+        drape_model_forces(m, DRAPE_PART_GRAVITY, x, NULL, w.f);
+        for (int p = 0; p < w.nf; p++) {
+            int id = L->free_to_id[p];
+            double gi = -w.f[3 * id + 2] / L->mass[id];
+            if (gi > g) g = gi;
+        }
+    }
+    double msum = 0.0, wsum = 0.0;
+    for (int p = 0; p < w.nf; p++) {
+        double mi = L->mass[L->free_to_id[p]];
+        w.wref[p] = o.force_ref > 0.0 ? o.force_ref : mi * g;
+        msum += mi;
+        wsum += w.wref[p];
+        if (!(w.wref[p] > 0.0)) {
+            drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, NULL,
+                            "equilibrium: no gravity in the model: give force_ref");
+            goto out;
+        }
+    }
+
+    drape_energies Ec, Et;
+    if (eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
+        drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                        "equilibrium: the start state cannot be evaluated (folded hinge "
+                        "or corner, or zero-length edge)");
+        goto out;
+    }
+    if (w.nf == 0) {
+        r->status = DRAPE_EQ_CONVERGED;
+        r->max_force_rel = 0.0;
+        r->certified = 1;
+        rc = 0;
+        goto done;
+    }
+
+    if (o.dyn_time > 0.0) {
+        int rcd = damped_dynamics(&w, x, o.dyn_time, o.dyn_dt, &r->dyn_steps, err);
+        if (rcd < 0) goto out;
+        if (rcd != 0 || eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
+            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                            "equilibrium: the damped dynamics failed (folded hinge or "
+                            "corner, or zero-length edge)");
+            goto out;
+        }
+    }
+    /* time scale T = sqrt(sigma / g) (sqrt(sigma m / w) with force_ref) */
+    double T = sqrt(L->sigma * msum / wsum);
+    double dt0 = o.dt0 > 0.0 ? o.dt0 : DRAPE_EQ_DT0_FACTOR * T;
+    double dt_newton = o.dt_newton > 0.0 ? o.dt_newton : DRAPE_EQ_DT_NEWTON_FACTOR * T;
+    double dt = dt0;
+    int newton = dt >= dt_newton;
+    double E = energy_sum(&Ec);
+    double frel = force_rel(&w, w.f);
+    double anorm = accel_norm(&w, w.f);
+    int have_jac = 0, skip_exact = 0;
+    double *rhs = w.rhs;
+
+    r->status = DRAPE_EQ_MAX_ITERS;
+    while (1) {
+        if (frel <= o.tol) {
+            r->status = DRAPE_EQ_CONVERGED;
+            break;
+        }
+        if (r->iterations >= o.max_iters) break;
+        if (dt < DRAPE_EQ_DT_COLLAPSE * dt0) {
+            r->status = DRAPE_EQ_STALLED;
+            break;
+        }
+        if (!have_jac) {
+            r->jacobian_evals++;
+            if (drape_model_jacobian(m, w.parts, x, NULL, w.K, NULL) != 0) {
+                drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                                "equilibrium: Hessian not defined (folded hinge or corner)");
+                goto out;
+            }
+            have_jac = 1;
+            if (w.eslot) clamp_compressed(&w, x);
+            gather(&w, w.f, rhs);
+        }
+        r->iterations++;
+        /* PTC: clamped + shift; Newton: exact, else clamped (modified
+         * Newton), else back to PTC */
+        int use_clamp = !newton || (w.Kc && skip_exact > 0);
+        if (skip_exact > 0) skip_exact--;
+        assemble(&w, newton ? 0.0 : 1.0 / (dt * dt), use_clamp);
+        int pd = factorize(&w, err);
+        if (pd == 0 && newton && !use_clamp && w.Kc) {
+            skip_exact = DRAPE_EQ_EXACT_RETRY; /* modified Newton for a while */
+            assemble(&w, 0.0, 1);
+            pd = factorize(&w, err);
+        }
+        if (pd < 0) goto out;
+        if (pd == 0) {
+            r->rejected++;
+            trace(&o, r->iterations, newton, newton ? INFINITY : dt, 0, 0, 0.0, E, frel, 0.0);
+            if (newton) { newton = 0; dt = dt_newton / 4.0; }
+            else dt *= 0.5;
+            continue;
+        }
+        if (solve(&w, rhs, w.dy, err) != 0) goto out;
+
+        /* line search (E3): Armijo on E along dy, at most DRAPE_EQ_LS_MAX
+         * halvings (Newton) or DRAPE_EQ_LS_PTC (PTC) */
+        double eps_E = DRAPE_EQ_EPS_E * energy_abs(&Ec);
+        double Fs = 0.0;
+        for (long j = 0; j < w.N; j++) Fs += rhs[j] * w.dy[j];
+        double alpha = 1.0, step = 0.0, an = anorm, Enew = E;
+        int accepted = 0, noise = 0;
+        int ls_max = newton ? DRAPE_EQ_LS_MAX : DRAPE_EQ_LS_PTC;
+        for (int ls = 0; ls <= ls_max; ls++, alpha *= 0.5) {
+            step = trial_point(&w, x, alpha, w.xt);
+            if (eval_energy(&w, w.xt, &Et) != 0) continue;
+            Enew = energy_sum(&Et);
+            int armijo = Enew <= E - DRAPE_EQ_ARMIJO * alpha * Fs && Enew < E - eps_E;
+            if (!armijo && Enew > E + eps_E) continue;
+            if (eval_forces(&w, w.xt, w.ft) != 0) continue;
+            an = accel_norm(&w, w.ft);
+            if (!armijo && !(an < anorm)) { /* within rounding: need less residual */
+                if (ls == 0 && newton) noise = 1;
+                continue;
+            }
+            accepted = 1;
+            break;
+        }
+        if (accepted) {
+            if (!newton) {
+                if (alpha < 1.0) dt *= sqrt(alpha); /* too long: shorten */
+                else { /* SER (E2) */
+                    double ratio = an > 0.0 ? anorm / an : o.dt_growth_max;
+                    if (ratio < o.dt_growth_min) ratio = o.dt_growth_min;
+                    if (ratio > o.dt_growth_max) ratio = o.dt_growth_max;
+                    dt *= ratio;
+                }
+            }
+            double *tmp = x; x = w.xt; w.xt = tmp;
+            tmp = w.f; w.f = w.ft; w.ft = tmp;
+            Ec = Et;
+            E = Enew;
+            anorm = an;
+            frel = force_rel(&w, w.f);
+            have_jac = 0;
+        }
+        trace(&o, r->iterations, newton, newton ? INFINITY : dt, 1, accepted, alpha,
+              E, frel, step);
+        if (accepted) {
+            if (newton) r->newton_steps++;
+            else r->ptc_steps++;
+            if (!newton && dt >= dt_newton) newton = 1;
+        } else {
+            r->rejected++;
+            if (newton) { newton = 0; dt = dt_newton / 4.0; }
+            else dt *= 0.5;
+            /* a full Newton step whose energy change is within rounding and
+             * that does not lower the residual: the roundoff floor (E5) */
+            if (noise) {
+                r->status = DRAPE_EQ_STALLED;
+                break;
+            }
+        }
+    }
+
+    x = iterate_home(&w, x);
+
+    /* certification (E6): the exact Hessian at x */
+    if (o.certify) {
+        r->jacobian_evals++;
+        if (drape_model_jacobian(m, w.parts, x, NULL, w.K, NULL) != 0) {
+            r->certified = 0;
+        } else {
+            assemble(&w, 0.0, 0);
+            int pd = factorize(&w, err);
+            if (pd < 0) goto out;
+            if (pd == 1) {
+                r->certified = 1;
+                r->min_pivot = min_pivot(w.LF);
+                if (o.eig_iters > 0) {
+                    double lam;
+                    if (lowest_mode(&w, o.eig_iters, &lam, err) != 0) goto out;
+                    r->omega_min = lam > 0.0 ? sqrt(lam) : NAN;
+                }
+            } else {
+                r->certified = 0;
+                r->not_posdef_column = (long)w.LF->minor;
+            }
+        }
+    }
+    rc = 0;
+
+done:
+    r->energy = Ec;
+    r->energy_J = energy_sum(&Ec);
+    r->max_force_rel = force_rel(&w, w.f);
+    r->max_strain = drape_model_max_strain(m, r->x);
+out:
+    if (x) iterate_home(&w, x);
+    work_free(&w);
+    r->wall_s = clock_s(CLOCK_MONOTONIC) - t_start;
+    r->cpu_s = clock_s(CLOCK_PROCESS_CPUTIME_ID) - c_start;
+    return rc;
+}
