@@ -55,9 +55,10 @@
 /* Threads.  Debian's CHOLMOD runs OpenMP regions with a fixed
  * num_threads(4) clause and calls the pthread OpenBLAS; on this project's
  * problem sizes both cost more than they gain (Cusick-size supernodes are
- * small, and the triangular solves are level-2 BLAS): single-threaded, a
- * 101 x 101 hang step took 0.6 of the default time, a 21 x 21 one 0.8
- * (docs/integrators.md).  Every CHOLMOD call below is therefore bracketed by
+ * small, and the triangular solves are level-2 BLAS): single-threaded, runs of
+ * the 101 x 101 and 21 x 21 hang lattices took 0.55-0.6 of the default
+ * wall time (docs/integrators.md).  omp_set_num_threads(1) does not
+ * override a num_threads clause; max-active-levels 0 does.  Every CHOLMOD call below is therefore bracketed by
  * "one thread" settings that are restored afterwards, so nothing else in
  * the process (GSL's dense LU on OpenBLAS) is affected.  The two library
  * functions are looked up at run time (POSIX dlsym on the global scope):

@@ -473,6 +473,44 @@ START_TEST(test_auto_and_bad_option)
 }
 END_TEST
 
+/* Every allocation failure inside drape_integrator_new with each linear
+ * solver is reported as E_NOMEM (run under valgrind for leaks). */
+START_TEST(test_alloc_failures)
+{
+    tscene t;
+    ts_build(&t, 2.0, 0.02);
+    static const char *const impl[] = {"cvode-bdf", "arkode-imex"};
+    static const int ls[] = {DRAPE_LINSOL_KLU, DRAPE_LINSOL_SCHUR, DRAPE_LINSOL_SCHUR_DIRECT};
+    for (int k = 0; k < 2; k++) {
+        for (int l = 0; l < 3; l++) {
+            int done = 0;
+            for (long n = 1; n < 200 && !done; n++) {
+                drape_integrator_opts o;
+                drape_integrator_opts_default(&o);
+                o.linsol = ls[l];
+                drape_error err;
+                drape_error_clear(&err);
+                drape_alloc_fail_at(n);
+                drape_integrator *I = drape_integrator_new(t.m, impl[k], &o, &err);
+                drape_alloc_fail_at(0);
+                if (I) {
+                    done = 1;
+                    /* and it runs */
+                    ck_assert_int_eq(drape_integrator_step_to(I, 1e-3, DRAPE_STEP_NORMAL,
+                                                              &err), 0);
+                    drape_integrator_free(I);
+                } else {
+                    ck_assert_msg(err.kind == DRAPE_E_NOMEM, "%s/%s, fail at %ld: %s",
+                                  impl[k], drape_linsol_name(ls[l]), n, err.msg);
+                }
+            }
+            ck_assert(done);
+        }
+    }
+    ts_free(&t);
+}
+END_TEST
+
 Suite *linsol_suite(void)
 {
     Suite *s = suite_create("linsol");
@@ -489,6 +527,7 @@ Suite *linsol_suite(void)
     tcase_set_timeout(ti, 120);
     tcase_add_test(ti, test_integration_agrees);
     tcase_add_test(ti, test_auto_and_bad_option);
+    tcase_add_test(ti, test_alloc_failures);
     suite_add_tcase(s, ti);
     return s;
 }
