@@ -52,6 +52,8 @@ static const char run_usage[] =
     "                           energy directly (pseudo-transient continuation,\n"
     "                           Newton, Hessian check; docs/equilibrium.md): only\n"
     "                           the final state, no transient frames\n"
+    "  --linear-solver NAME     auto (default), klu, schur or schur-direct\n"
+    "                           (docs/integrators.md, \"Linear solvers\")\n"
     "  --max-steps N            give up (status failed) after N integrator steps\n"
     "                           between two output points (default 1000000)\n"
     "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR\n"
@@ -73,7 +75,7 @@ const char *const drape_cli_run_keys[] = {
     "lin_setups", "nonlin_iters", "err_test_fails", "conv_fails", "mass_kg",
     "area_nominal_m2", "area_mesh_m2", "max_speed_m_s", "method", "iterations",
     "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
-    "max_force_rel", NULL};
+    "max_force_rel", "linear_solver", "lin_iters", "lin_factors", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -327,7 +329,7 @@ static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
 int drape_cli_run(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
-           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD };
+           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -339,6 +341,7 @@ int drape_cli_run(int argc, char **argv)
         {"out", required_argument, NULL, O_OUT},
         {"max-steps", required_argument, NULL, O_MAXSTEPS},
         {"method", required_argument, NULL, O_METHOD},
+        {"linear-solver", required_argument, NULL, O_LINSOL},
         {"format", required_argument, NULL, O_FORMAT},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
@@ -347,7 +350,7 @@ int drape_cli_run(int argc, char **argv)
     double rtol = 0, atol = 0, spacing = 0, t_max = 0;
     int csv = 0, quiet = 0, c;
     long max_steps = 0;
-    int method_static = 0;
+    int method_static = 0, linsol = 0;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;
@@ -370,6 +373,10 @@ int drape_cli_run(int argc, char **argv)
             if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
             break;
         case O_OUT: out_dir = optarg; break;
+        case O_LINSOL:
+            if (drape_linsol_parse(optarg, &linsol) != 0)
+                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'%s", optarg, "");
+            break;
         case O_METHOD:
             if (strcmp(optarg, "dynamic") == 0) method_static = 0;
             else if (strcmp(optarg, "static") == 0) method_static = 1;
@@ -462,6 +469,7 @@ int drape_cli_run(int argc, char **argv)
         drape_sim_opts_from_scene(&s, &so);
         so.observe_progress = rc.progress;
         if (max_steps > 0) so.max_steps = max_steps;
+        so.linsol = linsol;
         sim_ok = drape_sim_run(m, &so, (rc.obj || rc.h5 || rc.progress) ? observe : NULL, &rc,
                                &res, &err) == 0;
     }
@@ -537,6 +545,11 @@ int drape_cli_run(int argc, char **argv)
     add_num(&r, "min_pivot_N_m", method_static ? er.min_pivot : NAN);
     add_num(&r, "omega_min_rad_s", method_static ? er.omega_min : NAN);
     add_num(&r, "max_force_rel", method_static ? er.max_force_rel : NAN);
+    add_str(&r, "linear_solver", method_static ? "cholmod"
+                                 : res.stats.linsol > 0 ? drape_linsol_name(res.stats.linsol)
+                                                        : "none");
+    add_int(&r, "lin_iters", res.stats.lin_iters);
+    add_int(&r, "lin_factors", res.stats.lin_factors);
     if (!fields_match_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -166,6 +166,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     io.t_stop = o->t_max;
     io.max_order = o->max_order;
     io.max_steps = o->max_steps;
+    io.linsol = o->linsol;
     w0 = now_s();
     I = drape_integrator_new(m, o->integrator, &io, err);
     wall += now_s() - w0;

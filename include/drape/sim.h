@@ -44,6 +44,7 @@ typedef struct drape_sim_opts {
     double eq_window;    /* s, > 0 */
     double frame_every;  /* s; 0 = no frames */
     int max_order;       /* cvode-bdf; 0 = default */
+    int linsol;          /* drape_linsol (integrator.h); 0 = auto */
     long max_steps;      /* per output interval; 0 = default */
     int observe_progress; /* 1: also call the observer at every other output point */
 } drape_sim_opts;
