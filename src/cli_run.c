@@ -24,6 +24,7 @@
 #include "drape/scene.h"
 #include "drape/sim.h"
 #include "drape/units.h"
+#include "drape/yamldoc.h"
 
 #define DEFAULT_SCENE "scenes/cusick.yaml"
 
@@ -244,28 +245,6 @@ static int parse_quantity(const char *opt, const char *text, drape_dim dim,
         return -1;
     }
     return 0;
-}
-
-static char *slurp_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    size_t cap = 4096, n = 0;
-    char *buf = drape_malloc(cap);
-    while (buf) {
-        size_t k = fread(buf + n, 1, cap - n - 1, f);
-        n += k;
-        if (k == 0) break;
-        if (n + 1 >= cap) {
-            char *nb = drape_realloc(buf, cap * 2);
-            if (!nb) { drape_free(buf); buf = NULL; break; }
-            buf = nb;
-            cap *= 2;
-        }
-    }
-    fclose(f);
-    if (buf) buf[n] = 0;
-    return buf;
 }
 
 static int ensure_dir(const char *dir, drape_error *err)
@@ -562,8 +541,10 @@ int drape_cli_run(int argc, char **argv)
         int nkv = 0;
         for (int i = 0; i < r.n; i++)
             kv[nkv++] = (drape_kv){r.f[i].key, r.f[i].text, r.f[i].value};
-        fabric_text = slurp_text(s.fabric_path);
-        scene_text = slurp_text(scene_path);
+        /* the inputs as attributes; they were just read, so a failure here
+         * (NULL) only leaves the attribute out */
+        fabric_text = drape_cli_read_file(s.fabric_path, DRAPE_YDOC_MAX_BYTES, NULL, NULL);
+        scene_text = drape_cli_read_file(scene_path, DRAPE_YDOC_MAX_BYTES, NULL, NULL);
         drape_h5_final fin = {res.t_end_s, res.x, res.v, kv, nkv, fabric_text, scene_text};
         drape_h5 *h = rc.h5;
         rc.h5 = NULL;
