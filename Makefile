@@ -53,7 +53,7 @@ CLI_SRC  ?= src/main.c $(wildcard src/cli_*.c)
 TEST_SRC ?= $(wildcard tests/check_*.c)
 LIB_OBJ  = $(LIB_SRC:%.c=$(O)/%.o)
 CLI_OBJ  = $(CLI_SRC:%.c=$(O)/%.o)
-TEST_HELPERS = tests/testutil.c tests/elastica.c
+TEST_HELPERS = tests/testutil.c tests/elastica.c tests/fixture.c
 TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
 HEADERS  = $(wildcard include/drape/*.h)
 
@@ -80,7 +80,7 @@ $(O)/src/%.o: src/%.c $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -c -o $@ $<
 
-$(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h tests/elastica.h $(O)/tests/suites.gen.h
+$(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h tests/elastica.h tests/fixture.h $(O)/tests/suites.gen.h
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(CHECK_CFLAGS) -I$(O)/tests -c -o $@ $<
 

@@ -26,7 +26,7 @@ grep -qF "$BEGIN" "$DOC" && grep -qF "$END" "$DOC" || {
 }
 
 make --no-print-directory O="$O" TEST_SRC=tests/check_validation.c \
-    TEST_OBJ="$O/tests/check_validation.o $O/tests/runner.o $O/tests/testutil.o $O/tests/elastica.o" \
+    TEST_OBJ="$O/tests/check_validation.o $O/tests/runner.o $O/tests/testutil.o $O/tests/elastica.o $O/tests/fixture.o" \
     "$O/tests/check_drape"
 
 tables=$(mktemp)

@@ -25,52 +25,14 @@
 #include "drape/scene.h"
 #include "drape/sim.h"
 #include "drape/units.h"
+#include "fixture.h"
 #include "testutil.h"
 
-#define SIDE 0.10    /* m: 6 particles at 2 cm */
-#define SPACING 0.02 /* m */
-
-typedef struct tscene {
-    drape_fabric fab;
-    drape_scene sc;
-    drape_lattice *L;
-    drape_model *m;
-} tscene;
-
-static void ts_build(tscene *t, double c_air, double c_edge)
+/* the fixture, with its particle count checked by hand: 6 x 6 */
+static void ts_build(tf_scene *t, double c_air, double c_edge)
 {
-    drape_error err;
-    drape_error_clear(&err);
-    memset(t, 0, sizeof *t);
-    ck_assert_msg(drape_fabric_load(tu_src("fabrics/cotton-breen.yaml"), &t->fab, &err,
-                                    NULL, NULL) == 0, "fabric: %s", err.msg);
-    drape_scene *s = &t->sc;
-    s->kind = DRAPE_SCENE_HANG;
-    s->shape = DRAPE_SHAPE_RECTANGLE;
-    s->width = SIDE;
-    s->height = SIDE;
-    s->spacing = SPACING;
-    s->n_pins = 2;
-    s->pins[0][0] = 0;  s->pins[0][1] = -1;
-    s->pins[1][0] = -1; s->pins[1][1] = -1;
-    s->terms = DRAPE_TERM_ALL;
-    s->energy_form = DRAPE_FORM_CONSISTENT;
-    s->damping_air = c_air;
-    s->damping_edge = c_edge;
-    t->L = drape_lattice_new(s, &t->fab, &err);
-    ck_assert_msg(t->L != NULL, "lattice: %s", err.msg);
+    tf_build(t, c_air, c_edge);
     ck_assert_int_eq(t->L->n, 36);
-    ck_assert_int_eq(t->L->n_free, 34);
-    drape_model_opts mo;
-    drape_model_opts_from_scene(s, &mo);
-    t->m = drape_model_new(t->L, &t->fab, &mo, &err);
-    ck_assert_msg(t->m != NULL, "model: %s", err.msg);
-}
-
-static void ts_free(tscene *t)
-{
-    drape_model_free(t->m);
-    drape_lattice_free(t->L);
 }
 
 static void sim_opts(drape_sim_opts *o, const char *name, double rtol, double t_max)
@@ -113,7 +75,7 @@ START_TEST(test_registry)
     ck_assert_str_eq(drape_integrator_type_find("auto")->name, "cvode-bdf");
     ck_assert_ptr_null(drape_integrator_type_find("rk4"));
 
-    tscene t;
+    tf_scene t;
     ts_build(&t, 0, 0);
     drape_integrator_opts o;
     drape_integrator_opts_default(&o);
@@ -127,7 +89,7 @@ START_TEST(test_registry)
     o.rtol = -1;
     ck_assert_ptr_null(drape_integrator_new(t.m, "cvode-bdf", &o, &err));
     ck_assert_int_eq(err.kind, DRAPE_E_INPUT);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -136,7 +98,7 @@ END_TEST
  * 0.00062 GiB. */
 START_TEST(test_msbdf_refuses)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 0, 0);
     drape_integrator_opts o;
     drape_integrator_opts_default(&o);
@@ -153,7 +115,7 @@ START_TEST(test_msbdf_refuses)
     ck_assert_msg(I != NULL, "%s", err.msg);
     ck_assert_int_eq(drape_integrator_dim(I), 204);
     drape_integrator_free(I);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -161,7 +123,7 @@ END_TEST
  * reported as E_NOMEM (run under valgrind for leaks). */
 START_TEST(test_alloc_failures)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 2.0, 0.02);
     for (size_t k = 0; k < N_ALL; k++) {
         int done = 0;
@@ -199,7 +161,7 @@ START_TEST(test_alloc_failures)
         drape_sim_result_free(&r);
     }
     ck_assert(done);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -209,7 +171,7 @@ END_TEST
 START_TEST(test_agreement)
 {
     const double t_end = 0.3, rtol = 1e-5, ref_rtol = 1e-10;
-    tscene t;
+    tf_scene t;
     ts_build(&t, 2.0, 0.02);
     size_t n3 = 3 * (size_t)t.L->n;
     drape_sim_opts o;
@@ -226,7 +188,7 @@ START_TEST(test_agreement)
     double vref = ref.max_speed;
     ck_assert_msg(vref > 0.05, "the cloth should be moving: %g m/s", vref);
     /* the references agree to 1/100 of the bound tested below */
-    double dref = max_abs_diff(ref.x, wit.x, n3) / SIDE;
+    double dref = max_abs_diff(ref.x, wit.x, n3) / TF_SIDE;
     ck_assert_msg(dref <= 1e-2 * 100 * rtol, "references differ by %g", dref);
 
     for (size_t k = 0; k < N_ALL; k++) {
@@ -236,7 +198,7 @@ START_TEST(test_agreement)
         int rc = drape_sim_run(t.m, &o, NULL, NULL, &r, &err);
         ck_assert_msg(rc == 0, "%s: %s", ALL[k], err.msg);
         ck_assert_str_eq(r.integrator, ALL[k]);
-        double dx = max_abs_diff(r.x, ref.x, n3) / SIDE;
+        double dx = max_abs_diff(r.x, ref.x, n3) / TF_SIDE;
         double dv = max_abs_diff(r.v, ref.v, n3) / vref;
         /* positions: within 100 rtol of the specimen size.  Velocities carry
          * the stretch vibration, which L-stable / BDF methods damp at this
@@ -249,7 +211,7 @@ START_TEST(test_agreement)
     }
     drape_sim_result_free(&ref);
     drape_sim_result_free(&wit);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -285,13 +247,13 @@ static int on_energy(void *ctx, const drape_sim_event *ev, drape_error *err)
 /* Energy scale: M g L (total mass falling over the specimen size). */
 static double energy_scale(const drape_lattice *L)
 {
-    return L->mass_total * DRAPE_G_STANDARD * SIDE;
+    return L->mass_total * DRAPE_G_STANDARD * TF_SIDE;
 }
 
 START_TEST(test_energy_conserved)
 {
     const double rtol = 1e-5;
-    tscene t;
+    tf_scene t;
     ts_build(&t, 0, 0);
     double bound = 10 * rtol * energy_scale(t.L);
     for (size_t k = 0; k < N_ALL; k++) {
@@ -311,14 +273,14 @@ START_TEST(test_energy_conserved)
         ck_assert_double_gt(r.kinetic_J, 1e-3 * energy_scale(t.L));
         drape_sim_result_free(&r);
     }
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
 START_TEST(test_energy_dissipated)
 {
     const double rtol = 1e-5;
-    tscene t;
+    tf_scene t;
     ts_build(&t, 0.5, 0.02);
     double bound = 10 * rtol * energy_scale(t.L);
     for (size_t k = 0; k < N_ALL; k++) {
@@ -336,7 +298,7 @@ START_TEST(test_energy_dissipated)
         ck_assert_msg(eo.prev < eo.e0 - 1e3 * bound, "%s: nothing dissipated", ALL[k]);
         drape_sim_result_free(&r);
     }
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -356,7 +318,7 @@ static void assert_clean_failure(const drape_sim_result *r, const drape_error *e
 
 START_TEST(test_too_much_work)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 0, 0);
     size_t n3 = 3 * (size_t)t.L->n;
     const char *names[] = {"arkode-erk", "gsl-rk8pd", "cvode-bdf"};
@@ -373,7 +335,7 @@ START_TEST(test_too_much_work)
         ck_assert_double_lt(r.t_end_s, 1.0);
         drape_sim_result_free(&r);
     }
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -382,7 +344,7 @@ END_TEST
  * there, and every integrator must stop cleanly, never with NaN. */
 START_TEST(test_folded_start_fails_cleanly)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 0, 0);
     size_t n3 = 3 * (size_t)t.L->n;
     int a = t.L->grid[0 * t.L->ni + 0], c = t.L->grid[0 * t.L->ni + 2];
@@ -398,7 +360,7 @@ START_TEST(test_folded_start_fails_cleanly)
         assert_clean_failure(&r, &err, ALL[k], NULL, n3);
         drape_sim_result_free(&r);
     }
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -425,7 +387,7 @@ static int on_sched(void *ctx, const drape_sim_event *ev, drape_error *err)
 
 START_TEST(test_observer_schedule)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 2.0, 0.02);
     drape_sim_opts o;
     drape_sim_result r;
@@ -466,13 +428,13 @@ START_TEST(test_observer_schedule)
     ck_assert_int_eq(drape_sim_run(t.m, &o, NULL, NULL, &r, &err), -1);
     ck_assert_int_eq(err.kind, DRAPE_E_INPUT);
     drape_sim_result_free(&r);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
 START_TEST(test_equilibrium)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 5.0, 0.05);
     const drape_lattice *L = t.L;
     drape_sim_opts o;
@@ -517,14 +479,14 @@ START_TEST(test_equilibrium)
     ck_assert_int_eq(r.status, DRAPE_SIM_T_MAX);
     ck_assert_double_eq(r.t_end_s, t_eq);
     drape_sim_result_free(&r);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
 /* One internal step, dense output inside it, restart. */
 START_TEST(test_one_step_dense_reinit)
 {
-    tscene t;
+    tf_scene t;
     ts_build(&t, 2.0, 0.02);
     size_t n3 = 3 * (size_t)t.L->n;
     double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
@@ -558,7 +520,7 @@ START_TEST(test_one_step_dense_reinit)
         ck_assert_int_eq(drape_integrator_step_to(I, tc, DRAPE_STEP_NORMAL, &err), 0);
         ck_assert_double_eq(drape_integrator_time(I), tc);
         drape_integrator_state(I, x, v);
-        ck_assert_msg(max_abs_diff(x, x1, n3) <= 100 * o.rtol * SIDE, "%s: %g", names[k],
+        ck_assert_msg(max_abs_diff(x, x1, n3) <= 100 * o.rtol * TF_SIDE, "%s: %g", names[k],
                       max_abs_diff(x, x1, n3));
         drape_integrator_free(I);
     }
@@ -566,7 +528,7 @@ START_TEST(test_one_step_dense_reinit)
     free(v);
     free(x1);
     free(v0);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 

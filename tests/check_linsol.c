@@ -28,52 +28,8 @@
 #include "drape/linsol_schur.h"
 #include "drape/model.h"
 #include "drape/scene.h"
+#include "fixture.h"
 #include "testutil.h"
-
-#define SIDE 0.10    /* m: 6 x 6 particles at 2 cm */
-#define SPACING 0.02 /* m */
-
-typedef struct tscene {
-    drape_fabric fab;
-    drape_scene sc;
-    drape_lattice *L;
-    drape_model *m;
-} tscene;
-
-static void ts_build(tscene *t, double c_air, double c_edge)
-{
-    drape_error err;
-    drape_error_clear(&err);
-    memset(t, 0, sizeof *t);
-    ck_assert_msg(drape_fabric_load(tu_src("fabrics/cotton-breen.yaml"), &t->fab, &err,
-                                    NULL, NULL) == 0, "fabric: %s", err.msg);
-    drape_scene *s = &t->sc;
-    s->kind = DRAPE_SCENE_HANG;
-    s->shape = DRAPE_SHAPE_RECTANGLE;
-    s->width = SIDE;
-    s->height = SIDE;
-    s->spacing = SPACING;
-    s->n_pins = 2;
-    s->pins[0][0] = 0;  s->pins[0][1] = -1;
-    s->pins[1][0] = -1; s->pins[1][1] = -1;
-    s->terms = DRAPE_TERM_ALL;
-    s->energy_form = DRAPE_FORM_CONSISTENT;
-    s->damping_air = c_air;
-    s->damping_edge = c_edge;
-    t->L = drape_lattice_new(s, &t->fab, &err);
-    ck_assert_msg(t->L != NULL, "lattice: %s", err.msg);
-    ck_assert_int_eq(t->L->n_free, 34);
-    drape_model_opts mo;
-    drape_model_opts_from_scene(s, &mo);
-    t->m = drape_model_new(t->L, &t->fab, &mo, &err);
-    ck_assert_msg(t->m != NULL, "model: %s", err.msg);
-}
-
-static void ts_free(tscene *t)
-{
-    drape_model_free(t->m);
-    drape_lattice_free(t->L);
-}
 
 /* Deterministic uniform numbers in [-1, 1). */
 static double urand(unsigned long *s)
@@ -84,7 +40,7 @@ static double urand(unsigned long *s)
 
 /* Everything one linear-algebra case needs. */
 typedef struct lcase {
-    tscene t;
+    tf_scene t;
     long n3, dim, nnz;
     double *x, *v, *K, *D, *invm;
     gsl_matrix *J; /* dense first-order Jacobian, dim x dim */
@@ -94,7 +50,7 @@ typedef struct lcase {
  * given by vel (0 = at rest); K, D from the model; J assembled densely. */
 static void lc_build(lcase *c, double scale, double pert, double vel)
 {
-    ts_build(&c->t, 2.0, 0.02);
+    tf_build(&c->t, 2.0, 0.02);
     const drape_lattice *L = c->t.L;
     const drape_pattern *P = drape_model_pattern(c->t.m);
     c->n3 = 3L * L->n_free;
@@ -113,7 +69,7 @@ static void lc_build(lcase *c, double scale, double pert, double vel)
     for (int i = 0; i < L->n; i++) {
         for (int k = 0; k < 3; k++) {
             c->x[3 * i + k] = cen[k] + scale * (L->xinit[3 * i + k] - cen[k]) +
-                              pert * SPACING * urand(&seed);
+                              pert * TF_SPACING * urand(&seed);
             c->v[3 * i + k] = vel * urand(&seed);
         }
     }
@@ -140,7 +96,7 @@ static void lc_free(lcase *c)
     free(c->K);
     free(c->D);
     free(c->invm);
-    ts_free(&c->t);
+    tf_free(&c->t);
 }
 
 /* A = I - gamma J (dense, new). */
@@ -402,8 +358,8 @@ static void run(drape_model *m, const char *name, int ls, double rtol, double t_
 START_TEST(test_integration_agrees)
 {
     const double t_end = 0.2, rtol = 1e-5;
-    tscene t;
-    ts_build(&t, 2.0, 0.02);
+    tf_scene t;
+    tf_build(&t, 2.0, 0.02);
     size_t n3 = 3 * (size_t)t.L->n;
     double *xr = malloc(sizeof(double) * n3), *vr = malloc(sizeof(double) * n3);
     double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
@@ -433,25 +389,25 @@ START_TEST(test_integration_agrees)
              * check_integrator.c asks of every integrator */
             double dx = 0.0;
             for (size_t i = 0; i < n3; i++) dx = fmax(dx, fabs(x[i] - xr[i]));
-            ck_assert_msg(dx / SIDE <= 100 * rtol, "%s/%s: position error %g", impl[k],
-                          drape_linsol_name(ls[l]), dx / SIDE);
+            ck_assert_msg(dx / TF_SIDE <= 100 * rtol, "%s/%s: position error %g", impl[k],
+                          drape_linsol_name(ls[l]), dx / TF_SIDE);
             /* and klu vs schur: the same Newton iteration up to the linear
              * solve's tolerance, so much closer than the error above */
             double dk = 0.0;
             for (size_t i = 0; i < n3; i++) dk = fmax(dk, fabs(x[i] - xk[i]));
-            ck_assert_msg(dk / SIDE <= 10 * rtol, "%s/%s vs klu: %g", impl[k],
-                          drape_linsol_name(ls[l]), dk / SIDE);
+            ck_assert_msg(dk / TF_SIDE <= 10 * rtol, "%s/%s vs klu: %g", impl[k],
+                          drape_linsol_name(ls[l]), dk / TF_SIDE);
         }
     }
     free(xr); free(vr); free(x); free(v); free(xk); free(vk);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
 START_TEST(test_auto_and_bad_option)
 {
-    tscene t;
-    ts_build(&t, 2.0, 0.02);
+    tf_scene t;
+    tf_build(&t, 2.0, 0.02);
     size_t n3 = 3 * (size_t)t.L->n;
     double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
     drape_integrator_stats st;
@@ -469,7 +425,7 @@ START_TEST(test_auto_and_bad_option)
     ck_assert_int_eq(err.kind, DRAPE_E_INPUT);
     free(x);
     free(v);
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
@@ -477,8 +433,8 @@ END_TEST
  * solver is reported as E_NOMEM (run under valgrind for leaks). */
 START_TEST(test_alloc_failures)
 {
-    tscene t;
-    ts_build(&t, 2.0, 0.02);
+    tf_scene t;
+    tf_build(&t, 2.0, 0.02);
     static const char *const impl[] = {"cvode-bdf", "arkode-imex"};
     static const int ls[] = {DRAPE_LINSOL_KLU, DRAPE_LINSOL_SCHUR, DRAPE_LINSOL_SCHUR_DIRECT};
     for (int k = 0; k < 2; k++) {
@@ -507,7 +463,7 @@ START_TEST(test_alloc_failures)
             ck_assert(done);
         }
     }
-    ts_free(&t);
+    tf_free(&t);
 }
 END_TEST
 
