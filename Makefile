@@ -8,6 +8,9 @@
 #   make check-slurm  test scripts/slurm/ on a real single-node Slurm (root;
 #                  installs slurm-wlm and munge; docs/batch.md)
 #   make bench-quick  integrators on the default scenes -> docs/integrators.md
+#   make bench     work-precision report -> docs/performance/ (drape bench;
+#                  installs gnuplot-nox when missing; docs/performance.md)
+#   make check-hard  the hard-case suite tests/hard/ (docs/stability.md)
 #   make asan      ASan+UBSan build in build/asan, all suites + a small run
 #   make valgrind  memcheck: drape check/run and the loader suites
 #   make fuzz      fuzz the fabric and scene loaders (FUZZ_TIME=30 s each)
@@ -57,7 +60,8 @@ TEST_HELPERS = tests/testutil.c tests/elastica.c tests/fixture.c
 TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
 HEADERS  = $(wildcard include/drape/*.h)
 
-.PHONY: all deps run check unit validate check-slurm install clean
+.PHONY: all deps run check unit validate check-slurm check-hard bench bench-quick \
+        asan valgrind fuzz install clean
 
 all: drape
 
@@ -74,6 +78,10 @@ $(O)/libdrape.a: $(LIB_OBJ)
 	$(AR) rcs $@ $(LIB_OBJ)
 
 drape: $(CLI_OBJ) $(O)/libdrape.a
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $(CLI_OBJ) $(O)/libdrape.a $(DRAPE_LIBS)
+
+# A private binary for out-of-tree work: make O=/tmp/x /tmp/x/drape
+$(O)/drape: $(CLI_OBJ) $(O)/libdrape.a
 	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $(CLI_OBJ) $(O)/libdrape.a $(DRAPE_LIBS)
 
 $(O)/src/%.o: src/%.c $(HEADERS)
@@ -107,6 +115,14 @@ unit: $(O)/tests/check_drape
 # Benchmarks: wall time, steps and DC per integrator (docs/integrators.md).
 bench-quick: drape
 	scripts/bench-quick.sh
+
+# Work-precision report (docs/performance.md).
+bench: drape
+	scripts/bench.sh
+
+# Hard cases: each finishes bounded or fails with a diagnosis (docs/stability.md).
+check-hard: drape
+	scripts/check-hard.sh
 
 # Reliability (docs/reliability.md); the scripts install valgrind and clang
 # themselves when missing.

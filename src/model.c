@@ -125,9 +125,12 @@ typedef struct angle_geo {
 } angle_geo;
 
 /* Fill G for edges a, b.  Returns 1 if an edge is shorter than lmin (or
- * not finite), else 0. */
+ * not finite), else 0.  Only what `need` asks for beyond the edges, s, c,
+ * sn, cn and w is computed: GEO_ANGLE the angle (one atan2), GEO_HESS the
+ * unit vectors ua, ub of the Hessian (the force path needs neither). */
+enum { GEO_ANGLE = 1, GEO_HESS = 2 };
 static int angle_geo_set(const double *a, const double *b, double lmin,
-                         angle_geo *G)
+                         unsigned need, angle_geo *G)
 {
     double n[3], h;
     G->la = norm3(a);
@@ -135,21 +138,27 @@ static int angle_geo_set(const double *a, const double *b, double lmin,
     if (!(G->la > lmin) || !(G->lb > lmin) || !isfinite(G->la) ||
         !isfinite(G->lb))
         return 1;
+    double ila = 1.0 / G->la, ilb = 1.0 / G->lb;
     for (int k = 0; k < 3; k++) {
-        G->ah[k] = a[k] / G->la;
-        G->bh[k] = b[k] / G->lb;
+        G->ah[k] = a[k] * ila;
+        G->bh[k] = b[k] * ilb;
     }
     cross3(G->ah, G->bh, n);
     G->s = norm3(n);
     G->c = dot3(G->ah, G->bh);
     cross3(n, G->ah, G->wa);
     cross3(G->bh, n, G->wb);
-    for (int k = 0; k < 3; k++) {
-        G->ua[k] = G->s > 0.0 ? G->wa[k] / G->s : 0.0;
-        G->ub[k] = G->s > 0.0 ? G->wb[k] / G->s : 0.0;
+    if (need & GEO_HESS) {
+        double is = G->s > 0.0 ? 1.0 / G->s : 0.0;
+        for (int k = 0; k < 3; k++) {
+            G->ua[k] = G->wa[k] * is;
+            G->ub[k] = G->wb[k] * is;
+        }
     }
-    G->angle = atan2(G->s, G->c);
-    h = hypot(G->s, G->c);
+    G->angle = (need & GEO_ANGLE) ? atan2(G->s, G->c) : 0.0;
+    /* s and c are components of unit vectors, so s^2 + c^2 is about 1 and
+     * cannot overflow or underflow: sqrt is exact enough, hypot is slow. */
+    h = sqrt(G->s * G->s + G->c * G->c);
     G->sn = G->s / h;
     G->cn = G->c / h;
     return 0;
@@ -215,8 +224,9 @@ static void angle_local(const angle_geo *G, const double ca[3],
 
 /* ------------------------------------------------------- energy functions */
 
-/* Bending: energy of hinge h at turning angle psi >= 0, and, if gop is
- * not NULL, g'(psi)/psi and g''(psi).  The hinge spreads psi over
+/* Bending: energy of hinge h at turning angle psi >= 0 when gop is NULL;
+ * otherwise g'(psi)/psi and g''(psi) (and 0 is returned: the force path
+ * does not pay for the energy).  The hinge spreads psi over
  * l = length sigma (lattice.h; length 0 means 1):
  *   consistent K = psi/l,   E = w sigma^2 Wb(K),       g'/psi = w sigma^2 M(K)/K / l^2,
  *                                                       g''    = w sigma^2 M'(K) / l^2
@@ -236,6 +246,7 @@ static double bend_g(const drape_model *m, const drape_hinge *h, double psi,
             double d1 = drape_fit_slope(M, K);
             *gop = 2.0 * q * (d1 + drape_fit_value_over_x(M, K));
             *g2 = 2.0 * q * (drape_fit_slope2(M, K) * K + 2.0 * d1);
+            return 0.0;
         }
         return wt * drape_fit_value(M, K) * K * sg * sg / 2.0;
     }
@@ -243,12 +254,13 @@ static double bend_g(const drape_model *m, const drape_hinge *h, double psi,
     if (gop) {
         *gop = q * drape_fit_value_over_x(M, K);
         *g2 = q * drape_fit_slope(M, K);
+        return 0.0;
     }
     return wt * sg * sg * drape_fit_integral(M, K);
 }
 
-/* Shear: energy of a corner of weight wt at shear angle gamma, and, if d1
- * is not NULL, dE/dgamma and d2E/dgamma2. */
+/* Shear: energy of a corner of weight wt at shear angle gamma when d1 is
+ * NULL; otherwise dE/dgamma and d2E/dgamma2 (and 0 is returned). */
 static double shear_g(const drape_model *m, double wt, double gamma,
                       double *d1, double *d2)
 {
@@ -260,12 +272,14 @@ static double shear_g(const drape_model *m, double wt, double gamma,
             double s1 = drape_fit_slope(F, gamma);
             *d1 = q * (s1 * gamma + v);
             *d2 = q * (drape_fit_slope2(F, gamma) * gamma + 2.0 * s1);
+            return 0.0;
         }
         return q * v * gamma;
     }
     if (d1) {
         *d1 = q * drape_fit_value(F, gamma);
         *d2 = q * drape_fit_slope(F, gamma);
+        return 0.0;
     }
     return q * drape_fit_integral(F, gamma);
 }
@@ -361,7 +375,9 @@ static int kern_bend(const drape_model *m, const drape_hinge *h,
     angle_geo G;
     sub3(x + 3 * h->mid, x + 3 * h->prev, a);
     sub3(x + 3 * h->next, x + 3 * h->mid, b);
-    if (angle_geo_set(a, b, MODEL_LEN_TINY * m->L->sigma, &G)) return 1;
+    if (angle_geo_set(a, b, MODEL_LEN_TINY * m->L->sigma,
+                      GEO_ANGLE | (Jl ? GEO_HESS : 0u), &G))
+        return 1;
     if (G.s < MODEL_SIN_TINY && G.c < 0.0) return 1;
     double psi = G.angle;
     bend_g(m, h, psi, &gop, &g2);
@@ -386,7 +402,8 @@ static int kern_shear(const drape_model *m, const drape_corner *cn,
     angle_geo G;
     sub3(x + 3 * cn->warp, x + 3 * cn->mid, a);
     sub3(x + 3 * cn->weft, x + 3 * cn->mid, b);
-    if (angle_geo_set(a, b, MODEL_LEN_TINY * m->L->sigma, &G)) return 1;
+    if (angle_geo_set(a, b, MODEL_LEN_TINY * m->L->sigma, Jl ? GEO_HESS : 0u, &G))
+        return 1;
     if (G.s < MODEL_SIN_TINY) return 1;
     double gamma = atan2(G.c, G.s);
     shear_g(m, cn->weight, gamma, &d1, &d2);
