@@ -21,6 +21,7 @@
 #include "cli.h"
 #include "cli_io.h"
 #include "drape/alloc.h"
+#include "drape/fabric.h"
 #include "drape/scene.h"
 #include "drape/units.h"
 
@@ -40,17 +41,21 @@ static const char batch_usage[] =
     "  --out DIR            output directory (default batch-out; created)\n"
     "  --resume             keep the rows of DIR/results.csv whose status is\n"
     "                       equilibrium, t_max or failed and run only the other\n"
-    "                       fabrics (rows with status error are run again)\n"
+    "                       fabrics (rows with status error or interrupted are\n"
+    "                       run again; with --frames an interrupted run continues\n"
+    "                       from its checkpoint, `drape run --resume`)\n"
     "  --frames             also write each run's frames to DIR/frames/NAME/\n"
     "  -q, --quiet          no progress line on stderr\n"
     "  -h, --help           show this help\n"
     "Passed on to every run (see `drape run --help`):\n"
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
-    "  --t-max T, --max-steps N\n"
+    "  --t-max T, --max-steps N, --strain-limit X\n"
     "\n"
     "Progress goes to stderr only when it is a terminal.  The first interrupt\n"
     "(Ctrl-C) stops launching runs and waits for the running ones; a second\n"
-    "one, or SIGTERM, stops them (their rows are not written).\n"
+    "one, or SIGTERM, stops them at their next output point (their rows get\n"
+    "status interrupted and are run again by --resume).  The scene is checked\n"
+    "once, before any run (with the first fabric that loads).\n"
     "\n"
     "Exit status: 0 every fabric reached equilibrium or t_max; 6 at least one\n"
     "run failed or could not run (see its row); 1 invalid scene; 2 bad command\n"
@@ -86,6 +91,7 @@ typedef struct job {
     pid_t pid;
     enum job_state state;
     int resumed;                 /* row taken from an earlier results.csv */
+    int cont;                    /* continue its interrupted run (--resume --frames) */
     char **row;                  /* N_COLS fields, or NULL */
 } job;
 
@@ -301,6 +307,7 @@ static int load_previous(batch *b, drape_error *err)
         for (int k = 0; k < b->n && !jb; k++)
             if (strcmp(b->jobs[k].fabric, row[COL_FILE]) == 0) jb = &b->jobs[k];
         if (jb) {
+            if (b->frames && strcmp(row_status(row), "interrupted") == 0) jb->cont = 1;
             if (!jb->row && status_done(row_status(row))) {
                 jb->row = row;
                 jb->state = JOB_DONE;
@@ -351,15 +358,24 @@ static int launch(batch *b, job *jb, drape_error *err)
     av[k++] = "--format";
     av[k++] = "csv";
     av[k++] = "--quiet";
-    av[k++] = "--fabric";
-    av[k++] = jb->fabric;
-    for (int i = 0; i < b->npass; i++) av[k++] = b->pass[i];
-    if (b->frames) {
-        av[k++] = "--out";
+    char ck[BATCH_PATH_MAX + 16];
+    snprintf(ck, sizeof ck, "%s/drape.h5", frames);
+    if (jb->cont && access(ck, F_OK) == 0) {
+        /* the options are stored in the checkpoint (batch.args made sure
+         * they are this batch's) */
+        av[k++] = "--resume";
         av[k++] = frames;
+    } else {
+        av[k++] = "--fabric";
+        av[k++] = jb->fabric;
+        for (int i = 0; i < b->npass; i++) av[k++] = b->pass[i];
+        if (b->frames) {
+            av[k++] = "--out";
+            av[k++] = frames;
+        }
+        av[k++] = "--";
+        av[k++] = b->scene;
     }
-    av[k++] = "--";
-    av[k++] = b->scene;
     av[k] = NULL;
 
     fflush(NULL);
@@ -545,7 +561,7 @@ static void make_name(batch *b, int k)
 int drape_cli_batch(int argc, char **argv)
 {
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
-           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS };
+           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -558,6 +574,7 @@ int drape_cli_batch(int argc, char **argv)
         {"energy-form", required_argument, NULL, O_FORM},
         {"t-max", required_argument, NULL, O_TMAX},
         {"max-steps", required_argument, NULL, O_MAXSTEPS},
+        {"strain-limit", required_argument, NULL, O_STRAIN},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -614,6 +631,10 @@ int drape_cli_batch(int argc, char **argv)
             if (check_quantity("--t-max", optarg, DRAPE_DIM_TIME, 1)) return 2;
             name = "--t-max";
             break;
+        case O_STRAIN:
+            if (check_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, 1)) return 2;
+            name = "--strain-limit";
+            break;
         case O_MAXSTEPS: {
             char *end;
             errno = 0;
@@ -657,9 +678,20 @@ int drape_cli_batch(int argc, char **argv)
     int handlers = 0;
     char sub[BATCH_PATH_MAX];
 
-    /* the scene is the same for every run: check it once, here */
+    /* the scene is the same for every run: check it once, here, before
+     * anything is written (its own checks, and those that need a fabric,
+     * with the first one that loads; a fabric's own errors belong in its
+     * row) */
     drape_scene s;
     if (drape_scene_load(b.scene, &s, &err, NULL, NULL) != 0) goto fail;
+    for (int i = optind + 1; i < argc; i++) {
+        drape_fabric fab;
+        drape_error fe;
+        drape_error_clear(&fe);
+        if (drape_fabric_load(argv[i], &fab, &fe, NULL, NULL) != 0) continue;
+        if (drape_scene_check_with_fabric(&s, &fab, &err) != 0) goto fail;
+        break;
+    }
 
     /* fabrics, in command-line order, without repeats */
     int nf = argc - optind - 1;

@@ -760,13 +760,18 @@ static int category(sun_kind k, int flag)
     }
 }
 
-static const char *hint(int cat)
+static const char *hint(sun_kind k, int cat)
 {
     switch (cat) {
     case H_WORK:
-        return "the step limit was reached: the problem is too stiff for this "
-               "integrator or rtol too tight; use cvode-bdf or arkode-dirk, "
-               "loosen rtol, or add damping";
+        if (k == SK_ERK)
+            return "the step limit was reached: the problem is too stiff for an "
+                   "explicit integrator; use arkode-dirk or cvode-bdf, loosen "
+                   "rtol, or add damping";
+        return "the step limit was reached: rtol is too tight for this run's "
+               "length or the stiff modes are undamped; loosen rtol, raise "
+               "--max-steps, add edge damping, or try another implicit "
+               "integrator (arkode-dirk, cvode-bdf)";
     case H_ACC:
         return "the tolerance asks for more than double precision: loosen rtol/atol";
     case H_ERR:
@@ -798,7 +803,7 @@ static int fail(sun_state *s, int flag, double t, const char *during,
                     "%s failed at t = %.9g s%s%s: %s%s%s%s; hint: %s", s->name, t,
                     during ? " in " : "", during ? during : "",
                     fname ? fname : "unknown flag", s->msg[0] ? " (" : "",
-                    s->msg, s->msg[0] ? ")" : "", hint(category(s->kind, flag)));
+                    s->msg, s->msg[0] ? ")" : "", hint(s->kind, category(s->kind, flag)));
     free(fname); /* malloc'd by SUNDIALS 6.x */
     return -1;
 }

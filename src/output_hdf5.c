@@ -48,10 +48,15 @@ struct drape_h5 {
 
 /* ----------------------------------------------------------- errors */
 
+/* The innermost description, first line only (HDF5's can span several
+ * lines with a time stamp and buffer addresses). */
 static herr_t walk_cb(unsigned n, const H5E_error2_t *e, void *data)
 {
     char *buf = data;
-    if (n == 0 && e && e->desc) snprintf(buf, 256, "%s", e->desc);
+    if (n == 0 && e && e->desc) {
+        snprintf(buf, 256, "%s", e->desc);
+        buf[strcspn(buf, "\r\n")] = 0;
+    }
     return 0;
 }
 
@@ -421,6 +426,19 @@ static int write_final(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
         H5Gclose(g);
         g = -1;
     }
+    if (fin->n_run > 0 && fin->run) {
+        g = H5Gcreate2(h->file, "run", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        if (g < 0) goto h5err;
+        for (int k = 0; k < fin->n_run; k++) {
+            const drape_kv *kv = fin->run + k;
+            if (!kv->key || !kv->key[0]) continue;
+            if (kv->text ? attr_string(g, kv->key, kv->text) < 0
+                         : attr_double(g, kv->key, kv->value) < 0)
+                goto h5err;
+        }
+        H5Gclose(g);
+        g = -1;
+    }
     if ((fin->fabric_yaml && attr_string(h->file, "fabric_yaml", fin->fabric_yaml) < 0) ||
         (fin->scene_yaml && attr_string(h->file, "scene_yaml", fin->scene_yaml) < 0))
         goto h5err;
@@ -564,4 +582,286 @@ int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
 fail:
     drape_h5_discard(h);
     return -1;
+}
+
+/* ----------------------------------------------------------- reading */
+
+const drape_kv *drape_kv_find(const drape_kv *kv, int n, const char *key)
+{
+    for (int k = 0; kv && k < n; k++)
+        if (kv[k].key && strcmp(kv[k].key, key) == 0) return kv + k;
+    return NULL;
+}
+
+static void kv_free(drape_kv *kv, int n)
+{
+    for (int k = 0; kv && k < n; k++) {
+        drape_free((char *)kv[k].key);
+        drape_free((char *)kv[k].text);
+    }
+    drape_free(kv);
+}
+
+void drape_h5_checkpoint_free(drape_h5_checkpoint *c)
+{
+    if (!c) return;
+    drape_free(c->x);
+    drape_free(c->v);
+    kv_free(c->run, c->n_run);
+    kv_free(c->stats, c->n_stats);
+    drape_free(c->fabric_yaml);
+    drape_free(c->scene_yaml);
+    memset(c, 0, sizeof *c);
+}
+
+/* A string attribute (variable or fixed length, any character set) as a
+ * new string, or NULL. */
+static char *read_string_attr(hid_t a)
+{
+    hid_t t = H5Aget_type(a);
+    char *out = NULL;
+    if (t < 0) return NULL;
+    htri_t var = H5Tis_variable_str(t);
+    if (var > 0) {
+        char *raw = NULL;
+        if (H5Aread(a, t, &raw) >= 0 && raw) {
+            out = drape_strdup(raw);
+            H5free_memory(raw);
+        }
+    } else if (var == 0) {
+        size_t n = H5Tget_size(t);
+        if (n > 0 && n < ((size_t)1 << 30) && (out = drape_calloc(n + 1, 1)) != NULL &&
+            H5Aread(a, t, out) < 0) {
+            drape_free(out);
+            out = NULL;
+        }
+    }
+    H5Tclose(t);
+    return out;
+}
+
+/* Attributes of a group (strings and numbers) into a new array. */
+static int read_attrs(hid_t file, const char *group, drape_kv **out, int *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    if (H5Lexists(file, group, H5P_DEFAULT) <= 0) return 0;
+    hid_t g = H5Gopen2(file, group, H5P_DEFAULT);
+    if (g < 0) return -1;
+    H5O_info_t info;
+    int rc = -1;
+    if (H5Oget_info2(g, &info, H5O_INFO_NUM_ATTRS) < 0) goto out;
+    int n = (int)info.num_attrs;
+    drape_kv *kv = drape_calloc((size_t)n + 1, sizeof *kv);
+    if (!kv) goto out;
+    *out = kv;
+    for (int k = 0; k < n; k++) {
+        hid_t a = H5Aopen_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, (hsize_t)k, H5P_DEFAULT,
+                                 H5P_DEFAULT);
+        if (a < 0) goto out;
+        char name[256];
+        ssize_t len = H5Aget_name(a, sizeof name, name);
+        hid_t t = H5Aget_type(a);
+        int ok = len > 0 && t >= 0;
+        if (ok && H5Tget_class(t) == H5T_STRING) {
+            kv[*nout].text = read_string_attr(a);
+            ok = kv[*nout].text != NULL;
+        } else if (ok) {
+            double v = NAN;
+            ok = H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0;
+            kv[*nout].value = v;
+        }
+        if (t >= 0) H5Tclose(t);
+        H5Aclose(a);
+        if (!ok) goto out;
+        if (!(kv[*nout].key = drape_strdup(name))) goto out;
+        (*nout)++;
+    }
+    rc = 0;
+out:
+    H5Gclose(g);
+    return rc;
+}
+
+static char *read_root_string(hid_t file, const char *name)
+{
+    if (H5Aexists(file, name) <= 0) return NULL;
+    hid_t a = H5Aopen(file, name, H5P_DEFAULT);
+    if (a < 0) return NULL;
+    char *s = read_string_attr(a);
+    H5Aclose(a);
+    return s;
+}
+
+/* An [n][3] f64 dataset into a new array; *n its rows (-1 on failure). */
+static double *read_n3(hid_t loc, const char *name, int *n)
+{
+    double *buf = NULL;
+    *n = -1;
+    hid_t ds = H5Dopen2(loc, name, H5P_DEFAULT);
+    if (ds < 0) return NULL;
+    hid_t sp = H5Dget_space(ds);
+    hsize_t dims[2] = {0, 0};
+    if (sp >= 0 && H5Sget_simple_extent_ndims(sp) == 2 &&
+        H5Sget_simple_extent_dims(sp, dims, NULL) == 2 && dims[1] == 3 && dims[0] < (1u << 30)) {
+        buf = drape_malloc(sizeof(double) * (size_t)(3 * dims[0] + 1));
+        if (buf && (dims[0] == 0 ||
+                    H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0)) {
+            *n = (int)dims[0];
+        } else {
+            drape_free(buf);
+            buf = NULL;
+        }
+    }
+    if (sp >= 0) H5Sclose(sp);
+    H5Dclose(ds);
+    return buf;
+}
+
+/* A 1-D f64 dataset of exactly n entries into buf. */
+static int read_1d(hid_t loc, const char *name, double *buf, int n)
+{
+    hid_t ds = H5Dopen2(loc, name, H5P_DEFAULT);
+    if (ds < 0) return -1;
+    hid_t sp = H5Dget_space(ds);
+    hsize_t dims[1] = {0};
+    int rc = -1;
+    if (sp >= 0 && H5Sget_simple_extent_ndims(sp) == 1 &&
+        H5Sget_simple_extent_dims(sp, dims, NULL) == 1 && dims[0] == (hsize_t)n &&
+        (n == 0 || H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0))
+        rc = 0;
+    if (sp >= 0) H5Sclose(sp);
+    H5Dclose(ds);
+    return rc;
+}
+
+static int count_1d(hid_t loc, const char *name)
+{
+    hid_t ds = H5Dopen2(loc, name, H5P_DEFAULT);
+    if (ds < 0) return -1;
+    hid_t sp = H5Dget_space(ds);
+    hsize_t dims[1] = {0};
+    int n = -1;
+    if (sp >= 0 && H5Sget_simple_extent_ndims(sp) == 1 &&
+        H5Sget_simple_extent_dims(sp, dims, NULL) == 1 && dims[0] < (1u << 30))
+        n = (int)dims[0];
+    if (sp >= 0) H5Sclose(sp);
+    H5Dclose(ds);
+    return n;
+}
+
+static hid_t open_readonly(const char *path, drape_error *err)
+{
+    (void)H5dont_atexit();
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    if (access(path, R_OK) != 0) {
+        drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot open: %s", strerror(errno));
+        return -1;
+    }
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) h5_fail(path, err, "cannot open the file");
+    return f;
+}
+
+int drape_h5_checkpoint_read(const char *path, drape_h5_checkpoint *c, drape_error *err)
+{
+    int rc = -1, nv = -1;
+    hid_t g = -1;
+    memset(c, 0, sizeof *c);
+    hid_t f = open_readonly(path, err);
+    if (f < 0) return -1;
+    if (H5Lexists(f, "final", H5P_DEFAULT) <= 0) {
+        drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "no /final state in the file");
+        goto out;
+    }
+    g = H5Gopen2(f, "final", H5P_DEFAULT);
+    if (g < 0) goto h5err;
+    c->x = read_n3(g, "positions", &c->n);
+    c->v = read_n3(g, "velocities", &nv);
+    if (!c->x || !c->v || nv != c->n) {
+        drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL,
+                        "/final/positions and /final/velocities unreadable or of different sizes");
+        goto out;
+    }
+    hid_t a = H5Aopen(g, "time_s", H5P_DEFAULT);
+    if (a < 0) goto h5err;
+    herr_t r = H5Aread(a, H5T_NATIVE_DOUBLE, &c->t_s);
+    H5Aclose(a);
+    if (r < 0) goto h5err;
+    c->frames = H5Lexists(f, "times", H5P_DEFAULT) > 0 ? count_1d(f, "times") : 0;
+    if (c->frames < 0) goto h5err;
+    if (read_attrs(f, "run", &c->run, &c->n_run) != 0 ||
+        read_attrs(f, "stats", &c->stats, &c->n_stats) != 0)
+        goto h5err;
+    c->fabric_yaml = read_root_string(f, "fabric_yaml");
+    c->scene_yaml = read_root_string(f, "scene_yaml");
+    rc = 0;
+    goto out;
+h5err:
+    h5_fail(path, err, "cannot read the final state or attributes");
+out:
+    if (g >= 0) H5Gclose(g);
+    H5Fclose(f);
+    return rc;
+}
+
+int drape_h5_copy_frames(drape_h5 *h, const char *path, drape_error *err)
+{
+    const int n = h->L->n;
+    int rc = -1, nf = 0;
+    double *times = NULL, *en = NULL, *x = NULL, *v = NULL;
+    hid_t f = open_readonly(path, err);
+    if (f < 0) return -1;
+    if (H5Lexists(f, "times", H5P_DEFAULT) <= 0) { /* no frames */
+        rc = 0;
+        goto out;
+    }
+    nf = count_1d(f, "times");
+    if (nf < 0) goto h5err;
+    times = drape_malloc(sizeof(double) * (size_t)(nf + 1));
+    en = drape_malloc(sizeof(double) * (size_t)(N_ENERGY * nf + 1));
+    if (!times || !en) goto nomem;
+    if (read_1d(f, "times", times, nf) != 0) goto h5err;
+    for (int k = 0; k < N_ENERGY; k++) {
+        char name[64];
+        double *col = drape_malloc(sizeof(double) * (size_t)(nf + 1));
+        if (!col) goto nomem;
+        snprintf(name, sizeof name, "energies/%s", energy_names[k]);
+        int r = read_1d(f, name, col, nf);
+        for (int i = 0; i < nf; i++) en[N_ENERGY * i + k] = r == 0 ? col[i] : NAN;
+        drape_free(col);
+    }
+    for (int i = 0; i < nf; i++) {
+        char name[64];
+        int nx = -1, nv = -1;
+        snprintf(name, sizeof name, "steps/%06d/positions", i);
+        x = read_n3(f, name, &nx);
+        snprintf(name, sizeof name, "steps/%06d/velocities", i);
+        v = H5Lexists(f, name, H5P_DEFAULT) > 0 ? read_n3(f, name, &nv) : NULL;
+        if (!x || nx != n || (v && nv != n)) {
+            drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL,
+                            "frame %d: /steps/%06d unreadable or not %d particles", i, i, n);
+            goto out;
+        }
+        const double *e = en + N_ENERGY * i;
+        drape_energies E = {e[1], e[2], e[3], e[4]};
+        if (drape_h5_frame(h, times[i], x, v, e[0], &E, err) != 0) goto out;
+        drape_free(x);
+        drape_free(v);
+        x = v = NULL;
+    }
+    rc = 0;
+    goto out;
+nomem:
+    drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+    goto out;
+h5err:
+    h5_fail(path, err, "cannot read the frames");
+out:
+    drape_free(times);
+    drape_free(en);
+    drape_free(x);
+    drape_free(v);
+    H5Fclose(f);
+    return rc;
 }

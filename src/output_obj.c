@@ -38,6 +38,8 @@ struct drape_obj {
     int *quads;   /* 4 per quad */
     double *uv;   /* 2n */
     double *nrm;  /* 3n workspace */
+    char **written; /* paths of the files this handle wrote (drape_obj_discard) */
+    int n_written, cap_written;
 };
 
 /* Copy a name for a one-line comment: control characters become spaces. */
@@ -59,12 +61,17 @@ static int check_dir(const char *dir, drape_error *err)
     if (!S_ISDIR(st.st_mode))
         return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
                                "output directory: not a directory");
+    if (access(dir, W_OK | X_OK) != 0)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "output directory: cannot write into it: %s", strerror(errno));
     return 0;
 }
 
 void drape_obj_free(drape_obj *o)
 {
     if (!o) return;
+    for (int k = 0; k < o->n_written; k++) drape_free(o->written[k]);
+    drape_free(o->written);
     drape_free(o->dir);
     drape_free(o->quads);
     drape_free(o->uv);
@@ -134,6 +141,35 @@ static void vertex_normals(drape_obj *o, const double *x)
     }
 }
 
+void drape_obj_discard(drape_obj *o)
+{
+    if (!o) return;
+    for (int k = 0; k < o->n_written; k++) unlink(o->written[k]);
+    drape_obj_free(o);
+}
+
+int drape_obj_written(const drape_obj *o)
+{
+    return o ? o->n_written : 0;
+}
+
+/* Remember a path for drape_obj_discard (once per path). */
+static int remember(drape_obj *o, const char *path)
+{
+    for (int k = o->n_written - 1; k >= 0; k--)
+        if (strcmp(o->written[k], path) == 0) return 0;
+    if (o->n_written == o->cap_written) {
+        int cap = o->cap_written ? 2 * o->cap_written : 64;
+        char **w = drape_realloc(o->written, sizeof *w * (size_t)cap);
+        if (!w) return -1;
+        o->written = w;
+        o->cap_written = cap;
+    }
+    if (!(o->written[o->n_written] = drape_strdup(path))) return -1;
+    o->n_written++;
+    return 0;
+}
+
 int drape_obj_write(drape_obj *o, const char *path, double t_s,
                     const double *x, drape_error *err)
 {
@@ -201,6 +237,11 @@ int drape_obj_write(drape_obj *o, const char *path, double t_s,
         goto out;
     }
     written = 0;
+    if (remember(o, path) != 0) { /* a file drape_obj_discard would not know */
+        unlink(path);
+        drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+        goto out;
+    }
     rc = 0;
 out:
     if (f) fclose(f);

@@ -50,6 +50,7 @@ const char *const drape_integrator_names[] = {
 #define SCENE_EQ_SPEED 1e-4         /* m/s, MODEL.md 6 */
 #define SCENE_EQ_WINDOW 0.2         /* s */
 #define SCENE_MAX_ORDER_MAX 5       /* BDF methods stop at order 5 */
+#define SCENE_STRAIN_LIMIT 0.2      /* end.strain_limit (diagnose.h, docs/scenes.md) */
 
 /* Lattice counting slack and memory limits (see the header comment). */
 #define SCENE_GRID_EPS 1e-9
@@ -771,13 +772,14 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
 static int parse_end(const scene_ctx *c, const drape_ynode *root,
                      drape_scene *s)
 {
-    static const char *const keys[] = {"equilibrium", "t_max", NULL};
+    static const char *const keys[] = {"equilibrium", "t_max", "strain_limit", NULL};
     static const char *const eq_keys[] = {"speed", "window", NULL};
     const drape_ynode *m = need(c, root, "", "end", "end: {t_max: 20 s}");
     const drape_ynode *eq, *win = NULL;
     if (!m) return -1;
     s->eq_speed = SCENE_EQ_SPEED;
     s->eq_window = SCENE_EQ_WINDOW;
+    s->strain_limit = SCENE_STRAIN_LIMIT;
     if (want_map(c, m, "end") ||
         drape_ynode_check_keys(c->doc, m, "end", keys, c->err))
         return -1;
@@ -793,7 +795,10 @@ static int parse_end(const scene_ctx *c, const drape_ynode *root,
         s->has_equilibrium = 1;
     }
     if (req_quantity(c, m, "end", "t_max", DRAPE_DIM_TIME, "time", Q_POSITIVE,
-                     "t_max: 20 s", &s->t_max, NULL))
+                     "t_max: 20 s", &s->t_max, NULL) ||
+        opt_quantity(c, m, "end", "strain_limit", DRAPE_DIM_NONE,
+                     "strain (a fraction: 0.2 = 20 %)", Q_POSITIVE,
+                     &s->strain_limit, NULL))
         return -1;
     if (s->has_equilibrium && !(s->eq_window < s->t_max)) {
         char a[32], b[32];

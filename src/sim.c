@@ -27,6 +27,7 @@ const char *drape_sim_status_name(drape_sim_status s)
     case DRAPE_SIM_EQUILIBRIUM: return "equilibrium";
     case DRAPE_SIM_T_MAX: return "t_max";
     case DRAPE_SIM_FAILED: return "failed";
+    case DRAPE_SIM_INTERRUPTED: return "interrupted";
     }
     return "failed";
 }
@@ -40,6 +41,9 @@ void drape_sim_opts_default(drape_sim_opts *o)
     o->t_max = 20.0;
     o->eq_speed = 1e-4;
     o->eq_window = 0.2;
+    o->strain_limit = DRAPE_DIAG_STRAIN_LIMIT_DEFAULT;
+    o->energy_gain = DRAPE_DIAG_ENERGY_GAIN_DEFAULT;
+    o->eq_below_since = -1.0;
 }
 
 void drape_sim_opts_from_scene(const drape_scene *s, drape_sim_opts *o)
@@ -56,6 +60,7 @@ void drape_sim_opts_from_scene(const drape_scene *s, drape_sim_opts *o)
     }
     o->frame_every = s->has_frames ? s->frame_every : 0.0;
     o->max_order = s->max_order;
+    o->strain_limit = s->strain_limit;
 }
 
 void drape_sim_result_free(drape_sim_result *r)
@@ -114,12 +119,49 @@ static int check_opts(const drape_sim_opts *o, drape_error *err)
     if (!(o->frame_every >= 0.0) || !isfinite(o->frame_every))
         return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "output.frames.every",
                                "must be a positive time, got %g s", o->frame_every);
+    if (!(o->strain_limit >= 0.0) || !(o->energy_gain >= 0.0))
+        return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "end.strain_limit",
+                               "limits must be non-negative, got strain %g, energy gain %g",
+                               o->strain_limit, o->energy_gain);
+    if (!(o->t0 >= 0.0) || !(o->t0 < o->t_max))
+        return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "end.t_max",
+                               "the start time %.9g s must lie in [0, t_max = %.9g s)",
+                               o->t0, o->t_max);
     return 0;
 }
 
 static int same_time(double a, double b)
 {
     return fabs(a - b) <= SIM_TIME_FUZZ * fmax(fabs(a), fabs(b));
+}
+
+/* Index k >= 1 of the first grid point k * step after t0 (a point that is
+ * t0 itself, up to SIM_TIME_FUZZ, was handled before the resume). */
+static long first_after(double t0, double step)
+{
+    long k = (long)floor(t0 / step) + 1;
+    if (k < 1) k = 1;
+    while (k > 1 && (double)(k - 1) * step > t0 && !same_time((double)(k - 1) * step, t0)) k--;
+    while ((double)k * step < t0 || same_time((double)k * step, t0)) k++;
+    return k;
+}
+
+/* Check the state at an output point; a fault sets err (E_NUMERIC). */
+static int diagnose_point(drape_model *m, const drape_sim_opts *o, const drape_integrator *I,
+                          double t, const double *x, const double *v, drape_sim_result *r,
+                          drape_error *err)
+{
+    char what[400];
+    if (drape_diagnose(m, t, x, v, o->strain_limit, o->energy_gain, &r->diag_ref,
+                       &r->diagnosis) == 0)
+        return 0;
+    drape_diagnosis_format(&r->diagnosis, what, sizeof what);
+    const char *hint = "tighten rtol or use an implicit integrator";
+    if (r->diagnosis.kind == DRAPE_DIAG_STRAIN)
+        hint = "tighten rtol, or raise end.strain_limit (--strain-limit) if such a "
+               "strain is physical";
+    return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL, "%s: %s; hint: %s",
+                           drape_integrator_name(I), what, hint);
 }
 
 static int notify(drape_sim_observer obs, void *ctx, unsigned what, double t,
@@ -145,9 +187,13 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     int rc = -1;
     double wall = 0.0, w0;
     drape_integrator_stats st;
+    const int resume = o->x0 != NULL || o->v0 != NULL || o->t0 > 0.0;
 
     memset(r, 0, sizeof *r);
     r->status = DRAPE_SIM_FAILED;
+    r->eq_below_since = -1.0;
+    r->diagnosis.kind = DRAPE_DIAG_NONE;
+    r->diagnosis.term = "";
     if (check_opts(o, err)) return -1;
     r->x = drape_calloc(n3 ? n3 : 1, sizeof(double));
     r->v = drape_calloc(n3 ? n3 : 1, sizeof(double));
@@ -157,7 +203,10 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
         drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
         goto out;
     }
-    memcpy(r->x, L->xinit, sizeof(double) * n3);
+    memcpy(r->x, o->x0 ? o->x0 : L->xinit, sizeof(double) * n3);
+    if (o->v0) memcpy(r->v, o->v0, sizeof(double) * n3);
+    if (o->diag_ref) r->diag_ref = *o->diag_ref;
+    else drape_diag_ref_init(m, r->x, r->v, &r->diag_ref);
 
     drape_integrator_opts io;
     drape_integrator_opts_default(&io);
@@ -169,6 +218,10 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     io.linsol = o->linsol;
     w0 = now_s();
     I = drape_integrator_new(m, o->integrator, &io, err);
+    if (I && resume && drape_integrator_reinit(I, o->t0, r->x, r->v, err) != 0) {
+        drape_integrator_free(I);
+        I = NULL;
+    }
     wall += now_s() - w0;
     if (!I) goto out;
     snprintf(r->integrator, sizeof r->integrator, "%s", drape_integrator_name(I));
@@ -176,20 +229,36 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     const int frames = o->frame_every > 0.0;
     const int eq = o->has_equilibrium;
     const double dt_check = eq ? o->eq_window / DRAPE_SIM_EQ_CHECKS_PER_WINDOW : 0.0;
-    long k_frame = 1, k_check = 1;
-    double t = 0.0, below_since = -1.0, speed;
+    long k_frame = frames ? first_after(o->t0, o->frame_every) : 1;
+    long k_check = eq ? first_after(o->t0, dt_check) : 1;
+    double t = o->t0, below_since = -1.0, speed;
     unsigned last_what = 0;
 
     drape_integrator_state(I, x, v);
-    speed = drape_sim_max_speed(L, v);
-    if (eq && speed < o->eq_speed) below_since = 0.0;
-    last_what = DRAPE_SIM_AT_START | (frames ? DRAPE_SIM_AT_FRAME : 0u);
-    if (frames) r->frames++;
-    if (notify(observer, ctx, last_what, 0.0, x, v, 0, speed, err)) goto out;
+    if (resume) {
+        /* the start state was checked and observed by the interrupted run */
+        below_since = eq ? o->eq_below_since : -1.0;
+        speed = drape_sim_max_speed(L, v);
+    } else {
+        if (!all_finite(x, n3)) {
+            diagnose_point(m, o, I, 0.0, x, v, r, err);
+            goto out;
+        }
+        speed = drape_sim_max_speed(L, v);
+        if (eq && speed < o->eq_speed) below_since = 0.0;
+        last_what = DRAPE_SIM_AT_START | (frames ? DRAPE_SIM_AT_FRAME : 0u);
+        if (frames) r->frames++;
+        if (notify(observer, ctx, last_what, 0.0, x, v, 0, speed, err)) goto out;
+    }
     memcpy(r->x, x, sizeof(double) * n3);
     memcpy(r->v, v, sizeof(double) * n3);
+    last_what = 0;
 
     for (;;) {
+        if (o->stop && *o->stop) {
+            r->status = DRAPE_SIM_INTERRUPTED;
+            break;
+        }
         double tf = frames ? (double)k_frame * o->frame_every : INFINITY;
         double tc = eq ? (double)k_check * dt_check : INFINITY;
         double t_next = fmin(o->t_max, fmin(tf, tc));
@@ -210,13 +279,9 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
             }
             goto out;
         }
-        if (!all_finite(x, n3) || !all_finite(v, n3)) {
-            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
-                            "%s produced a non-finite state by t = %.9g s; hint: "
-                            "tighten rtol or use an implicit integrator",
-                            drape_integrator_name(I), t_next);
-            goto out;
-        }
+        /* a fault stops the run before any observer sees the state;
+         * r->x, r->v keep the last good one */
+        if (diagnose_point(m, o, I, t_next, x, v, r, err)) goto out;
         t = t_next;
         memcpy(r->x, x, sizeof(double) * n3);
         memcpy(r->v, v, sizeof(double) * n3);
@@ -248,9 +313,10 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     }
 
     r->t_end_s = t;
+    r->eq_below_since = below_since;
     drape_integrator_get_stats(I, &st);
     if (last_what & DRAPE_SIM_AT_FRAME) r->frames++;
-    if (notify(observer, ctx, last_what, t, x, v, st.steps, speed, err)) {
+    if (last_what && notify(observer, ctx, last_what, t, x, v, st.steps, speed, err)) {
         r->status = DRAPE_SIM_FAILED;
         goto out;
     }
@@ -259,7 +325,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
 out:
     if (rc != 0) {
         r->status = DRAPE_SIM_FAILED;
-        r->t_end_s = I ? drape_integrator_time(I) : 0.0;
+        r->t_end_s = I ? drape_integrator_time(I) : o->t0;
     }
     r->wall_s = wall;
     if (I) {

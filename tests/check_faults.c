@@ -1,8 +1,11 @@
 /* check_faults.c: resource faults met by the drape binary (issue 7, item
- * 6, in part): a full disk while frames are written, a full stdout, and a
- * missing fabric.  Each must end with the documented I/O status (3), a
- * message naming the file, no result on stdout, and no drape.h5 or
- * temporary file left behind.
+ * 6): a full disk while frames are written, a full stdout, an unwritable
+ * output directory, and a missing fabric.  Each must end with the
+ * documented I/O status (3), a message naming the file, no result on
+ * stdout, and nothing of the run's own left behind: no drape.h5, no
+ * temporary file, no OBJ frame (those written before the failure are
+ * removed), and no output directory if the run created it; files that
+ * were there before stay.
  *
  * A full disk is simulated with a file size limit (ulimit -f, SIGXFSZ
  * ignored so write() fails with EFBIG, as it fails with ENOSPC on a full
@@ -76,16 +79,35 @@ static const char *new_dir(const char *name)
 START_TEST(test_disk_full_while_writing_frames)
 {
     const char *dir = new_dir("full");
-    char args[1024];
+    char args[1024], keep[700];
+    snprintf(keep, sizeof keep, "%s/keep.txt", dir);
+    FILE *k = fopen(keep, "w");
+    ck_assert_ptr_nonnull(k);
+    fputs("the user's\n", k);
+    fclose(k);
     snprintf(args, sizeof args, "%s --out '%s'", hang, dir);
-    /* 32 blocks of 512 bytes (POSIX sh units) = 16 KiB */
+    /* 32 blocks of 512 bytes (POSIX sh units) = 16 KiB: drape.h5 fails at
+     * its fifth frame, after five OBJ frames (3.5 KiB each) were written */
     int st = run_with("ulimit -f 32; trap '' XFSZ; exec", args);
     ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
     ck_assert_str_eq(out, "");
     ck_assert_msg(strncmp(err, "drape: ", 7) == 0 && strstr(err, "drape.h5") != NULL,
                   "message: %s", err);
+    /* HDF5's message is quoted on one line */
+    ck_assert_msg(strchr(err, '\n') == err + strlen(err) - 1, "message: %s", err);
     ck_assert_int_eq(count_files(dir, "drape.h5"), 0);
     ck_assert_int_eq(count_files(dir, "drape.xmf"), 0);
+    ck_assert_int_eq(count_files(dir, "frame_"), 0);
+    ck_assert_int_eq(count_files(dir, "keep.txt"), 1);
+    ck_assert_int_eq(count_files(dir, ""), 3); /* ., .., keep.txt */
+
+    /* a directory the run created is removed with its contents */
+    char made[700];
+    snprintf(made, sizeof made, "%s/made-by-drape", tu_scratch_dir());
+    snprintf(args, sizeof args, "%s --out '%s'", hang, made);
+    st = run_with("ulimit -f 32; trap '' XFSZ; exec", args);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_msg(access(made, F_OK) != 0, "%s left behind", made);
 
     /* the same run without the limit succeeds: the limit made the failure */
     const char *ok = new_dir("roomy");
@@ -93,6 +115,47 @@ START_TEST(test_disk_full_while_writing_frames)
     st = tu_run_drape(args, out, CAP, err, CAP);
     ck_assert_msg(st == 0, "status %d: %s", st, err);
     ck_assert_int_eq(count_files(ok, "drape.h5"), 1);
+}
+END_TEST
+
+/* An output directory that exists but cannot be written into: the error
+ * comes before any computation, names the directory, and nothing stays.
+ * Root ignores permission bits, so a read-only directory of sysfs is used
+ * then (skipped when there is none). */
+START_TEST(test_unwritable_output_dir)
+{
+    const char *dir = new_dir("readonly");
+    char probe[700];
+    chmod(dir, 0555);
+    snprintf(probe, sizeof probe, "%s/probe", dir);
+    FILE *f = fopen(probe, "w");
+    if (f) { /* root: try sysfs */
+        fclose(f);
+        unlink(probe);
+        dir = "/sys/kernel";
+        snprintf(probe, sizeof probe, "%s/drape-probe", dir);
+        f = fopen(probe, "w");
+        if (f || access(dir, F_OK) != 0) {
+            if (f) {
+                fclose(f);
+                unlink(probe);
+            }
+            fprintf(stderr, "note: no unwritable directory; test_unwritable_output_dir skipped\n");
+            return;
+        }
+    }
+    char args[1024];
+    snprintf(args, sizeof args, "%s --out '%s'", hang, dir);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_str_eq(out, "");
+    ck_assert_msg(strstr(err, dir) != NULL, "message: %s", err);
+    ck_assert_int_eq(count_files(dir, "drape.h5"), 0);
+    ck_assert_int_eq(count_files(dir, "frame_"), 0);
+    /* a directory that cannot be made at all */
+    snprintf(args, sizeof args, "%s --out /proc/drape-no-such/out", hang);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 3);
+    ck_assert_ptr_nonnull(strstr(err, "/proc/drape-no-such/out"));
 }
 END_TEST
 
@@ -135,6 +198,7 @@ Suite *faults_suite(void)
     TCase *tc = tcase_create("faults");
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_disk_full_while_writing_frames);
+    tcase_add_test(tc, test_unwritable_output_dir);
     tcase_add_test(tc, test_stdout_full);
     tcase_add_test(tc, test_missing_fabric);
     suite_add_tcase(s, tc);

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <hdf5.h>
 
@@ -331,7 +332,7 @@ START_TEST(test_h5_roundtrip)
                               {"wall_s", NULL, 1.25}};
     const char *fab = "fabric: cotton\nweight: 20 mg/cm^2 # \"quoted\" & <tags>\n";
     const char *scn = "scene: cusick\n";
-    drape_h5_final fin = {0.1, x[2], v, stats, 3, fab, scn};
+    drape_h5_final fin = {0.1, x[2], v, stats, 3, fab, scn, NULL, 0};
     ck_assert_int_eq(drape_h5_close(h, &fin, &err), 0);
     ck_assert_int_eq(count_entries(dir, ".tmp"), 0);
 
@@ -462,6 +463,129 @@ START_TEST(test_h5_discard_and_errors)
 }
 END_TEST
 
+/* drape_obj_discard removes exactly the frames its handle wrote: not an
+ * earlier file of the directory (issue 7: a failed run leaves nothing of
+ * its own). */
+START_TEST(test_obj_discard)
+{
+    drape_lattice *L = tl_small();
+    const char *dir = subdir("objdiscard");
+    char keep[600];
+    snprintf(keep, sizeof keep, "%s/frame_000099.obj", dir);
+    FILE *k = fopen(keep, "w");
+    ck_assert_ptr_nonnull(k);
+    fputs("# not drape's\n", k);
+    fclose(k);
+    drape_error err;
+    drape_error_clear(&err);
+    drape_obj *o = drape_obj_new(dir, L, "f", "s", &err);
+    ck_assert_ptr_nonnull(o);
+    for (int f = 0; f < 3; f++) ck_assert_int_eq(drape_obj_frame(o, f, 0.1 * f, L->x0, &err), 0);
+    ck_assert_int_eq(drape_obj_frame(o, 2, 0.2, L->x0, &err), 0); /* rewritten: once */
+    ck_assert_int_eq(drape_obj_written(o), 3);
+    ck_assert_int_eq(count_entries(dir, "frame_"), 4);
+    drape_obj_discard(o);
+    ck_assert_int_eq(count_entries(dir, "frame_"), 1);
+    ck_assert_int_eq(access(keep, F_OK), 0);
+    drape_obj_discard(NULL);
+    /* free keeps them */
+    drape_error_clear(&err);
+    o = drape_obj_new(dir, L, "f", "s", &err);
+    ck_assert_ptr_nonnull(o);
+    ck_assert_int_eq(drape_obj_frame(o, 0, 0.0, L->x0, &err), 0);
+    drape_obj_free(o);
+    ck_assert_int_eq(count_entries(dir, "frame_"), 2);
+    tl_free(L);
+}
+END_TEST
+
+/* What --resume reads back: /final, /run and /stats attributes, the input
+ * texts; and the frames of an earlier file copied in front of new ones. */
+START_TEST(test_h5_checkpoint_and_copy)
+{
+    drape_lattice *L = tl_small();
+    const char *dir = subdir("h5ck");
+    drape_error err;
+    drape_error_clear(&err);
+    drape_h5 *h = drape_h5_open(dir, L, &err);
+    ck_assert_ptr_nonnull(h);
+    double x[2][3 * 19], v[3 * 19];
+    for (int i = 0; i < 3 * 19; i++) {
+        x[0][i] = L->x0[i];
+        x[1][i] = L->x0[i] - 1e-3 * (i % 7);
+        v[i] = 0.01 * (i % 5) - 0.02;
+    }
+    drape_energies E0 = {1, 2, 3, -4}, E1 = {5, 6, 7, -8};
+    ck_assert_int_eq(drape_h5_frame(h, 0.0, x[0], v, 0.5, &E0, &err), 0);
+    ck_assert_int_eq(drape_h5_frame(h, 0.05, x[1], NULL, 0.25, &E1, &err), 0);
+    const drape_kv stats[] = {{"status", "interrupted", 0}, {"steps", NULL, 42}};
+    const drape_kv run[] = {{"integrator", "cvode-bdf", 0}, {"rtol", NULL, 1e-5},
+                            {"eq_below_since_s", NULL, -1}};
+    drape_h5_final fin = {0.07, x[1], v, stats, 2, "fabric: f\n", "scene: hang\n", run, 3};
+    ck_assert_int_eq(drape_h5_close(h, &fin, &err), 0);
+
+    char path[600];
+    snprintf(path, sizeof path, "%s/drape.h5", dir);
+    drape_h5_checkpoint c;
+    ck_assert_msg(drape_h5_checkpoint_read(path, &c, &err) == 0, "%s", err.msg);
+    ck_assert_int_eq(c.n, 19);
+    ck_assert_int_eq(c.frames, 2);
+    ck_assert(c.t_s == 0.07);
+    for (int i = 0; i < 3 * 19; i++) ck_assert(c.x[i] == x[1][i] && c.v[i] == v[i]);
+    ck_assert_str_eq(drape_kv_find(c.stats, c.n_stats, "status")->text, "interrupted");
+    ck_assert(drape_kv_find(c.stats, c.n_stats, "steps")->value == 42);
+    ck_assert_str_eq(drape_kv_find(c.run, c.n_run, "integrator")->text, "cvode-bdf");
+    ck_assert(drape_kv_find(c.run, c.n_run, "rtol")->value == 1e-5);
+    ck_assert(drape_kv_find(c.run, c.n_run, "eq_below_since_s")->value == -1);
+    ck_assert_ptr_null(drape_kv_find(c.run, c.n_run, "nope"));
+    ck_assert_str_eq(c.fabric_yaml, "fabric: f\n");
+    ck_assert_str_eq(c.scene_yaml, "scene: hang\n");
+    drape_h5_checkpoint_free(&c);
+
+    /* a new file in another directory: the two old frames, then one more */
+    const char *dir2 = subdir("h5ck2");
+    drape_error_clear(&err);
+    h = drape_h5_open(dir2, L, &err);
+    ck_assert_ptr_nonnull(h);
+    ck_assert_msg(drape_h5_copy_frames(h, path, &err) == 0, "%s", err.msg);
+    ck_assert_int_eq(drape_h5_frames(h), 2);
+    ck_assert_int_eq(drape_h5_frame(h, 0.1, x[0], v, 0.125, &E0, &err), 0);
+    ck_assert_int_eq(drape_h5_close(h, NULL, &err), 0);
+    snprintf(path, sizeof path, "%s/drape.h5", dir2);
+    hid_t F = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    ck_assert(F >= 0);
+    double t[3], ke[3], grav[3], p1[3 * 19];
+    read_doubles(F, "/times", t, 3);
+    read_doubles(F, "/energies/kinetic", ke, 3);
+    read_doubles(F, "/energies/gravity", grav, 3);
+    read_doubles(F, "/steps/000001/positions", p1, 3 * 19);
+    ck_assert(t[0] == 0.0 && t[1] == 0.05 && t[2] == 0.1);
+    ck_assert(ke[0] == 0.5 && ke[1] == 0.25 && ke[2] == 0.125);
+    ck_assert(grav[0] == -4 && grav[1] == -8 && grav[2] == -4);
+    for (int i = 0; i < 3 * 19; i++) ck_assert(p1[i] == x[1][i]);
+    ck_assert(H5Lexists(F, "/steps/000000/velocities", H5P_DEFAULT) > 0);
+    ck_assert(H5Lexists(F, "/steps/000001/velocities", H5P_DEFAULT) == 0);
+    H5Fclose(F);
+
+    /* errors: no file; a file without /final */
+    snprintf(path, sizeof path, "%s/none.h5", dir2);
+    drape_error_clear(&err);
+    ck_assert_int_eq(drape_h5_checkpoint_read(path, &c, &err), -1);
+    ck_assert_int_eq(err.kind, DRAPE_E_IO);
+    drape_h5_checkpoint_free(&c);
+    const char *dir3 = subdir("h5ck3");
+    drape_error_clear(&err);
+    h = drape_h5_open(dir3, L, &err);
+    ck_assert_ptr_nonnull(h);
+    ck_assert_int_eq(drape_h5_close(h, NULL, &err), 0);
+    snprintf(path, sizeof path, "%s/drape.h5", dir3);
+    ck_assert_int_eq(drape_h5_checkpoint_read(path, &c, &err), -1);
+    ck_assert_msg(strstr(err.msg, "/final") != NULL, "%s", err.msg);
+    drape_h5_checkpoint_free(&c);
+    tl_free(L);
+}
+END_TEST
+
 Suite *output_suite(void);
 Suite *output_suite(void)
 {
@@ -472,6 +596,8 @@ Suite *output_suite(void)
     tcase_add_test(tc, test_obj_errors);
     tcase_add_test(tc, test_h5_roundtrip);
     tcase_add_test(tc, test_h5_discard_and_errors);
+    tcase_add_test(tc, test_obj_discard);
+    tcase_add_test(tc, test_h5_checkpoint_and_copy);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -281,6 +281,34 @@ START_TEST(test_defaults)
 }
 END_TEST
 
+/* end.strain_limit (issue 7): optional, default 0.2, a positive number. */
+START_TEST(test_strain_limit)
+{
+    drape_scene s;
+    drape_error e;
+    ck_assert_int_eq(load_text("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                               "end: {t_max: 5 s}\n", &s, &e), 0);
+    ck_assert_close_rel(s.strain_limit, 0.2, 1e-15);
+    ck_assert_int_eq(load_text("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                               "end: {t_max: 5 s, strain_limit: 0.05}\n", &s, &e), 0);
+    ck_assert_close_rel(s.strain_limit, 0.05, 1e-15);
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "end:\n  t_max: 5 s\n  strain_limit: -0.1\n",
+                 DRAPE_E_INPUT, 6, 17, "end.strain_limit", NULL);
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "end:\n  t_max: 5 s\n  strain_limit: 5 cm\n",
+                 DRAPE_E_INPUT, 6, 17, "end.strain_limit", NULL);
+    /* every shipped scene loads unchanged and gets the default */
+    const char *names[] = {"scenes/cusick.yaml", "scenes/hang.yaml", "scenes/table.yaml",
+                           "scenes/cantilever.yaml"};
+    for (int k = 0; k < 4; k++) {
+        drape_error_clear(&e);
+        ck_assert_int_eq(drape_scene_load(tu_src(names[k]), &s, &e, NULL, NULL), 0);
+        ck_assert_close_rel(s.strain_limit, 0.2, 1e-15);
+    }
+}
+END_TEST
+
 START_TEST(test_options)
 {
     drape_scene s;
@@ -981,6 +1009,7 @@ Suite *scene_suite(void)
     tcase_add_test(tc, test_names);
     tcase_add_test(tc, test_defaults);
     tcase_add_test(tc, test_options);
+    tcase_add_test(tc, test_strain_limit);
     tcase_add_test(tc, test_fabric_relative);
     tcase_add_test(tc, test_alloc_failures);
     suite_add_tcase(s, tc);

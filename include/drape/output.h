@@ -42,11 +42,17 @@ typedef struct drape_obj drape_obj;
 /* Prepare OBJ output into directory dir (must exist) for lattice L:
  * faces, texture coordinates, workspaces.  fabric and scene are names for
  * the header comment (may be NULL).  Returns NULL with err set (E_IO if dir
- * is not a writable directory, E_NOMEM).  Caller frees with drape_obj_free. */
+ * is not a writable directory, E_NOMEM).  Caller frees with drape_obj_free
+ * (the frames stay) or drape_obj_discard. */
 drape_obj *drape_obj_new(const char *dir, const drape_lattice *L,
                          const char *fabric, const char *scene,
                          drape_error *err);
 void drape_obj_free(drape_obj *o);
+/* Remove every file this handle wrote (a failed run leaves no frame of its
+ * own behind; issue 7), then free it.  NULL is a no-op. */
+void drape_obj_discard(drape_obj *o);
+/* Number of distinct files written so far. */
+int drape_obj_written(const drape_obj *o);
 
 /* Write positions x (3n, m) at time t_s as DIR/frame_%06d.obj (frame >= 0).
  * Returns 0 or -1 with err set. */
@@ -77,6 +83,9 @@ typedef struct drape_h5_final {
     int n_stats;
     const char *fabric_yaml;  /* full text of the fabric file */
     const char *scene_yaml;   /* full text of the scene file */
+    /* added (issue 7): the run's options and resume state -> /run */
+    const drape_kv *run;
+    int n_run;
 } drape_h5_final;
 
 /* Create DIR/drape.h5 (under a temporary name) and write /mesh.  Switches
@@ -103,5 +112,37 @@ int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err);
 /* Close without keeping anything (temporary files removed); NULL is a
  * no-op. */
 void drape_h5_discard(drape_h5 *h);
+
+/* ---- reading back (drape run --resume; issue 7) ------------------------- */
+
+/* What a finished or interrupted run left in a drape.h5: /final, the
+ * attributes of /run and /stats, the input texts.  Every pointer is owned
+ * (drape_h5_checkpoint_free). */
+typedef struct drape_h5_checkpoint {
+    int n;                 /* particles (rows of /final/positions) */
+    double t_s;            /* /final time_s */
+    double *x, *v;         /* /final/positions, /final/velocities, 3n each */
+    int frames;            /* entries of /times */
+    drape_kv *run;         /* attributes of /run (none if absent) */
+    int n_run;
+    drape_kv *stats;       /* attributes of /stats */
+    int n_stats;
+    char *fabric_yaml, *scene_yaml; /* root attributes, NULL if absent */
+} drape_h5_checkpoint;
+
+/* Read path (a drape.h5).  Returns 0, or -1 with err set (E_IO naming the
+ * file: missing, not HDF5, no /final; E_NOMEM).  c is always initialised:
+ * free it with drape_h5_checkpoint_free in every case. */
+int drape_h5_checkpoint_read(const char *path, drape_h5_checkpoint *c,
+                             drape_error *err);
+void drape_h5_checkpoint_free(drape_h5_checkpoint *c);
+
+/* The pair named key of kv[0..n), or NULL. */
+const drape_kv *drape_kv_find(const drape_kv *kv, int n, const char *key);
+
+/* Append every frame of the drape.h5 at path (positions, velocities,
+ * times, energies; same number of particles) to h, in order: a resumed
+ * run keeps the frames of the interrupted one.  0 or -1 with err set. */
+int drape_h5_copy_frames(drape_h5 *h, const char *path, drape_error *err);
 
 #endif /* DRAPE_OUTPUT_H */

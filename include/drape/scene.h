@@ -91,6 +91,9 @@ typedef struct drape_scene {
     double eq_speed;               /* m/s (default 1e-4) */
     double eq_window;              /* s (default 0.2) */
     double t_max;                  /* s */
+    double strain_limit;           /* end.strain_limit: a run whose largest stretch
+                                      strain exceeds it stops (failed); default
+                                      0.2 (added, issue 7; docs/scenes.md) */
 
     int has_frames;
     double frame_every;            /* s */

@@ -14,10 +14,29 @@
  * that window.  Speeds between checks are not seen: a motion whose speed
  * dips below eq_speed exactly at every check for a whole window would pass
  * (checks are eq_window / 4 apart, so this needs a period that divides it).
+ *
+ * Faults and interruption (issue 7; docs/reliability.md).  At every output
+ * point after the start the state is checked (diagnose.h: NaN/inf, strain
+ * above strain_limit, energy blow-up) before any observer sees it; a fault
+ * ends the run with status failed and an E_NUMERIC error naming the time,
+ * the particle(s) and the term.  When opts.stop is given it is polled at
+ * every output point, after the observer: non-zero ends the run there with
+ * status interrupted (drape_sim_run returns 0; no DRAPE_SIM_AT_END call).
+ *
+ * Resuming.  With x0 (and v0, t0) the run starts at t0 from that state
+ * instead of t = 0 from the lattice's initial state: no DRAPE_SIM_AT_START
+ * call; frame and equilibrium grids continue (the first frame is the first
+ * k * frame_every after t0); eq_below_since and diag_ref carry the
+ * equilibrium span and the energy reference of the interrupted run
+ * (drape_sim_result), so the resumed run ends like the uninterrupted one
+ * up to the integrator's restart (its tolerance).
  */
 #ifndef DRAPE_SIM_H
 #define DRAPE_SIM_H
 
+#include <signal.h>
+
+#include "drape/diagnose.h"
 #include "drape/error.h"
 #include "drape/integrator.h"
 #include "drape/model.h"
@@ -29,10 +48,11 @@
 typedef enum drape_sim_status {
     DRAPE_SIM_EQUILIBRIUM,
     DRAPE_SIM_T_MAX,
-    DRAPE_SIM_FAILED
+    DRAPE_SIM_FAILED,
+    DRAPE_SIM_INTERRUPTED  /* opts.stop was raised (added, issue 7) */
 } drape_sim_status;
 
-/* "equilibrium", "t_max", "failed". */
+/* "equilibrium", "t_max", "failed", "interrupted". */
 const char *drape_sim_status_name(drape_sim_status s);
 
 typedef struct drape_sim_opts {
@@ -47,12 +67,22 @@ typedef struct drape_sim_opts {
     int linsol;          /* drape_linsol (integrator.h); 0 = auto */
     long max_steps;      /* per output interval; 0 = default */
     int observe_progress; /* 1: also call the observer at every other output point */
+    /* added (issue 7) */
+    const volatile sig_atomic_t *stop; /* polled at output points; NULL = never */
+    double strain_limit; /* stop (failed) above this strain; 0 = no limit */
+    double energy_gain;  /* stop (failed) when E rises by this x scale (diagnose.h); 0 = off */
+    double t0;           /* resume: start time, s (0 = a fresh run) */
+    const double *x0, *v0; /* resume: start state, 3n each (NULL: lattice xinit, rest) */
+    double eq_below_since; /* resume: start of the slow span at t0, s; -1 = none */
+    const drape_diag_ref *diag_ref; /* resume: energy reference; NULL = the start state */
 } drape_sim_opts;
 
 /* Defaults: "auto", rtol 1e-4, atol 1e-7 m, t_max 20 s, no equilibrium
- * (speed 1e-4 m/s and window 0.2 s if switched on), no frames. */
+ * (speed 1e-4 m/s and window 0.2 s if switched on), no frames, strain
+ * limit DRAPE_DIAG_STRAIN_LIMIT_DEFAULT, energy gain
+ * DRAPE_DIAG_ENERGY_GAIN_DEFAULT, no stop flag, a fresh start. */
 void drape_sim_opts_default(drape_sim_opts *o);
-/* Options of a loaded scene (solver, end, output.frames). */
+/* Options of a loaded scene (solver, end (strain_limit too), output.frames). */
 void drape_sim_opts_from_scene(const drape_scene *s, drape_sim_opts *o);
 
 /* What an observer call is about (bit mask). */
@@ -89,10 +119,14 @@ typedef struct drape_sim_result {
     long frames;         /* observer calls with DRAPE_SIM_AT_FRAME */
     double *x, *v;       /* final state, 3n each (failure: last finite state);
                             free with drape_sim_result_free */
+    /* added (issue 7) */
+    drape_diagnosis diagnosis; /* kind NONE unless a numerical fault stopped the run */
+    double eq_below_since;     /* at t_end_s (for a resume), s; -1 = none */
+    drape_diag_ref diag_ref;   /* the energy reference used (for a resume) */
 } drape_sim_result;
 
 /* Run model m.  observer may be NULL.  Returns 0 when the run ended with
- * status equilibrium or t_max; -1 with err set otherwise (E_INPUT for bad
+ * status equilibrium, t_max or interrupted; -1 with err set otherwise (E_INPUT for bad
  * options, E_NUMERIC for a solver failure, or the observer's error), the
  * result then has status failed and whatever was computed.  r is always
  * initialised: call drape_sim_result_free on it in every case. */
