@@ -11,6 +11,8 @@
 #   make bench     work-precision report -> docs/performance/ (drape bench;
 #                  installs gnuplot-nox when missing; docs/performance.md)
 #   make check-hard  the hard-case suite tests/hard/ (docs/stability.md)
+#   make check-default  the default Cusick scene, dynamic at 1 cm, must reach
+#                  equilibrium (~150 s CPU; in CI)
 #   make asan      ASan+UBSan build in build/asan, all suites + a small run
 #   make valgrind  memcheck: drape check/run and the loader suites
 #   make fuzz      fuzz the fabric and scene loaders (FUZZ_TIME=30 s each)
@@ -60,7 +62,7 @@ TEST_HELPERS = tests/testutil.c tests/elastica.c tests/fixture.c
 TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
 HEADERS  = $(wildcard include/drape/*.h)
 
-.PHONY: all deps run check unit validate check-slurm check-hard bench bench-quick \
+.PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
         asan valgrind fuzz install clean
 
 all: drape
@@ -119,6 +121,10 @@ bench-quick: drape
 # Work-precision report (docs/performance.md).
 bench: drape
 	scripts/bench.sh
+
+# The default scene to equilibrium, the way it asks (issue 3).
+check-default: drape
+	scripts/check-default.sh
 
 # Hard cases: each finishes bounded or fails with a diagnosis (docs/stability.md).
 check-hard: drape

@@ -51,8 +51,11 @@ static const char run_usage[] =
     "t_end_s, dc, nodes, r_min_m, r_max_m, tip_angle_deg, bending_length_m,\n"
     "flexural_rigidity_Nm, energy_J{kinetic,stretch,bend,shear,gravity},\n"
     "max_strain, wall_s, steps, rhs_evals, jac_evals, lin_setups, nonlin_iters,\n"
-    "err_test_fails, conv_fails; null where the scene does not produce one).\n"
-    "status is equilibrium, t_max, failed or interrupted.\n"
+    "err_test_fails, conv_fails, and more: mass_kg, areas, max_speed_m_s (at the\n"
+    "end), mean_speed_m_s (largest particle speed averaged over the last\n"
+    "equilibrium check interval: what the equilibrium test compares), the static\n"
+    "solver's keys, linear_solver, lin_iters, lin_factors; null where the scene\n"
+    "does not produce one).  status is equilibrium, t_max, failed or interrupted.\n"
     "\n"
     "Options (override the scene file):\n"
     "  --fabric FILE            fabric file instead of the scene's\n"
@@ -100,7 +103,8 @@ const char *const drape_cli_run_keys[] = {
     "lin_setups", "nonlin_iters", "err_test_fails", "conv_fails", "mass_kg",
     "area_nominal_m2", "area_mesh_m2", "max_speed_m_s", "method", "iterations",
     "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
-    "max_force_rel", "linear_solver", "lin_iters", "lin_factors", NULL};
+    "max_force_rel", "linear_solver", "lin_iters", "lin_factors", "mean_speed_m_s",
+    NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -882,6 +886,9 @@ int drape_cli_run(int argc, char **argv)
                                                         : "none");
     add_int(&r, "lin_iters", res.stats.lin_iters);
     add_int(&r, "lin_factors", res.stats.lin_factors);
+    /* the speed the equilibrium test used: largest particle speed averaged
+     * over the last check interval (sim.h); null without checks */
+    add_num(&r, "mean_speed_m_s", method_static ? NAN : res.check_speed);
     if (!fields_match_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

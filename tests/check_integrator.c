@@ -451,6 +451,7 @@ START_TEST(test_equilibrium)
     ck_assert_double_lt(r.t_end_s, o.t_max);
     ck_assert_double_ge(r.t_end_s, o.eq_window);
     ck_assert_double_lt(r.max_speed, o.eq_speed);
+    ck_assert_double_lt(r.check_speed, o.eq_speed); /* what the test compared */
     /* static balance: conservative force on each free particle is small
      * against its weight */
     double *f = malloc(sizeof(double) * 3 * (size_t)L->n);
