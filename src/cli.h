@@ -26,5 +26,6 @@ int drape_cli_check(int argc, char **argv);
 int drape_cli_run(int argc, char **argv);
 int drape_cli_batch(int argc, char **argv);  /* cli_batch.c, docs/batch.md */
 int drape_cli_import(int argc, char **argv); /* cli_import.c, docs/batch.md */
+int drape_cli_bench(int argc, char **argv);  /* cli_bench.c, docs/performance.md */
 
 #endif

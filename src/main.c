@@ -28,6 +28,10 @@ static const char usage_text[] =
     "  import arcsim|kes FILE...\n"
     "                       write fabric files from ARCSim material JSON or a\n"
     "                       CSV table of KES-F summary values\n"
+    "  bench [SCENE.yaml]   work-precision benchmark of the integrators (CSV:\n"
+    "                       time, counters, error against a reference);\n"
+    "                       --kernels: cost of one force and Jacobian\n"
+    "                       evaluation by lattice size (docs/performance.md)\n"
     "\n"
     "Options:\n"
     "  -h, --help           show this help and exit\n"
@@ -44,7 +48,10 @@ static const char usage_text[] =
     "  4   numerical failure (the run ended with status `failed`)\n"
     "  5   out of memory, or a lattice too large to allocate\n"
     "  6   drape batch: at least one run failed or could not run\n"
-    "  70  internal error (a bug in drape)\n";
+    "  70  internal error (a bug in drape)\n"
+    "  130 interrupted by SIGINT (drape run: status `interrupted`, resumable\n"
+    "      with --resume; drape batch: finished rows kept)\n"
+    "  143 interrupted by SIGTERM (drape run, as above)\n";
 
 void drape_cli_print_error(const drape_error *e)
 {
@@ -117,6 +124,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "run") == 0) return drape_cli_run(sub_argc, sub_argv);
     if (strcmp(cmd, "batch") == 0) return drape_cli_batch(sub_argc, sub_argv);
     if (strcmp(cmd, "import") == 0) return drape_cli_import(sub_argc, sub_argv);
+    if (strcmp(cmd, "bench") == 0) return drape_cli_bench(sub_argc, sub_argv);
     if (strcmp(cmd, "help") == 0) { fputs(usage_text, stdout); return 0; }
     fprintf(stderr, "drape: unknown command `%s'\nTry `drape --help'.\n", cmd);
     return drape_error_exit_status(DRAPE_E_USAGE);

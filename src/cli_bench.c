@@ -1,0 +1,1166 @@
+/* cli_bench.c: `drape bench`: work-precision measurements of the
+ * integrators on one scene (docs/performance.md; numerics.md section 5),
+ * and `drape bench --kernels`: the cost of one force evaluation and one
+ * Jacobian for hang lattices of growing size.
+ *
+ * Every run (reference and sweep point) happens in a forked child, so that
+ * one slow point can be stopped at --max-wall (SIGKILL; recorded as
+ * `timeout`) and an allocation failure (gsl-msbdf's dense matrices) ends
+ * only that point.  The child inherits the model and the reference
+ * samples, integrates with drape_sim_run (observer at the sample times),
+ * computes its errors and DC, and writes one fixed-size record (plus the
+ * samples, for a reference run) into a pipe.  Only this file, main.c and
+ * the other cli_*.c print. */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "cli_io.h"
+#include "drape/alloc.h"
+#include "drape/drape.h"
+#include "drape/fabric.h"
+#include "drape/integrator.h"
+#include "drape/lattice.h"
+#include "drape/linsol_schur.h"
+#include "drape/model.h"
+#include "drape/scene.h"
+#include "drape/sim.h"
+#include "drape/units.h"
+
+#define BENCH_DEFAULT_SCENE "scenes/cusick.yaml"
+#define BENCH_KERNEL_SCENE "scenes/hang.yaml"
+#define BENCH_MAX_LIST 64
+#define BENCH_REPEAT_BELOW_S 2.0      /* runs longer than this are not repeated */
+#define BENCH_DEFAULT_RTOLS "1e-3:1e-8:2"
+#define BENCH_DEFAULT_REF "arkode-erk,gsl-rk8pd"
+#define BENCH_DEFAULT_REF_RTOL 1e-10
+#define BENCH_DEFAULT_ATOL_SCALE 1e-3 /* m: atol = rtol * 1 mm */
+#define BENCH_DEFAULT_SAMPLES 10
+#define BENCH_DEFAULT_REPEAT 3
+#define BENCH_DEFAULT_MAX_WALL 300.0  /* s per run */
+#define BENCH_DEFAULT_SIZES "10,20,50,100,200"
+#define BENCH_KERNEL_MIN_BATCH_S 0.05 /* s of CPU per timed batch */
+#define BENCH_KERNEL_BATCHES 5
+#define BENCH_KERNEL_GAMMA 1e-4       /* s, gamma of the timed Schur factorisation */
+
+static const char bench_usage[] =
+    "Usage: drape bench [SCENE.yaml] [OPTIONS]\n"
+    "       drape bench --kernels [SCENE.yaml] [--sizes N,N,...] [--out DIR]\n"
+    "\n"
+    "Work-precision benchmark (docs/performance.md): run the scene (default\n"
+    BENCH_DEFAULT_SCENE ") with each integrator at each tolerance up to\n"
+    "--t-end, and measure time, solver counters and the error against a\n"
+    "reference solution.  The reference is the first --ref integrator at\n"
+    "--ref-rtol; the second one is run the same way and its error against the\n"
+    "first (rows `ref-check`) says how far the reference can be trusted.\n"
+    "Equilibrium detection is off: every run integrates [0, t_end].\n"
+    "\n"
+    "Tolerances: atol = rtol * --atol-scale on positions (m); velocities get\n"
+    "atol / T, T = sqrt(L / g) (docs/integrators.md, \"Tolerances\").\n"
+    "\n"
+    "Errors (all relative, dimensionless):\n"
+    "  err_pos_rel      max over the K sample times t_k = k t_end / K and over\n"
+    "                   particles of |x - x_ref|, divided by the specimen size\n"
+    "                   size_m (largest extent of the rest lattice)\n"
+    "  err_pos_rms_rel  the same with the RMS over particles\n"
+    "  err_final_rel    max over particles of |x - x_ref| at t_end / size_m\n"
+    "  err_final_v_rel  max over particles of |v - v_ref| at t_end / sqrt(g size_m)\n"
+    "  err_dc           |DC - DC_ref| at t_end (cusick and table scenes only)\n"
+    "\n"
+    "Options:\n"
+    "  --fabric FILE           fabric file instead of the scene's\n"
+    "  --spacing LEN           lattice spacing, e.g. 5mm\n"
+    "  --integrators A,B,...   integrators to sweep (default: all six)\n"
+    "  --rtols LIST            comma-separated values, or HI:LO:N = N per decade\n"
+    "                          from HI down to LO (default " BENCH_DEFAULT_RTOLS ")\n"
+    "  --atol-scale LEN        atol = rtol * LEN (default 1 mm)\n"
+    "  --linear-solver NAME    auto (default), klu, schur or schur-direct\n"
+    "  --t-end T               horizon (default: the scene's t_max)\n"
+    "  --samples K             sample times for err_pos_rel (default 10)\n"
+    "  --repeat N              time a point as the minimum of N runs; runs\n"
+    "                          longer than 2 s are not repeated (default 3)\n"
+    "  --max-wall S            stop a run after S s of wall time and record it as\n"
+    "                          timeout; tighter tolerances of that integrator are\n"
+    "                          then skipped (default 300; 0 = no limit)\n"
+    "  --ref A,B               reference pair (default " BENCH_DEFAULT_REF ")\n"
+    "  --ref-rtol X[,Y]        tolerance of the reference A [and of B] (default\n"
+    "                          1e-10 for both)\n"
+    "  --ref-max-wall S        time limit of each reference run (default 0 = none)\n"
+    "  --out DIR               write DIR/NAME.csv (replaced after every point)\n"
+    "                          instead of the CSV on stdout\n"
+    "  --name NAME             file name stem (default: the scene file's, or\n"
+    "                          `kernels' with --kernels)\n"
+    "  --kernels               time one force evaluation (RHS), K and D, the\n"
+    "                          first-order J and one CHOLMOD factorisation of\n"
+    "                          S = M - gamma D - gamma^2 K on square lattices of\n"
+    "                          the scene (default " BENCH_KERNEL_SCENE ") with N x N\n"
+    "                          particles at its spacing; CPU time, minimum of 5\n"
+    "                          batches\n"
+    "  --sizes N,N,...         lattice sides for --kernels (default " BENCH_DEFAULT_SIZES ")\n"
+    "  -q, --quiet             no progress on stderr (progress is printed only when\n"
+    "                          stderr is a terminal)\n"
+    "  -h, --help              show this help\n"
+    "\n"
+    "CSV columns: role (ref, ref-check, sweep), scene, fabric, particles,\n"
+    "free_particles, size_m, t_end_s, samples, integrator, default (1 for the\n"
+    "integrator `auto' resolves to), linear_solver, rtol, atol_m, status (ok,\n"
+    "failed, timeout, skipped), wall_s (minimum over repeats, integrator set-up\n"
+    "and stepping), cpu_s (minimum, the run's process CPU time), repeats,\n"
+    "steps, rhs_evals, jac_evals, lin_setups, lin_factors, nonlin_iters,\n"
+    "err_test_fails, conv_fails, err_pos_rel, err_pos_rms_rel, err_final_rel,\n"
+    "err_final_v_rel, dc, dc_ref, err_dc, nodes, message.  Empty = not available.\n"
+    "--kernels columns: side, particles, free_particles, nnz_K, rhs_ms, jac_ms\n"
+    "(K and D), jac_first_order_ms, schur_factor_ms, rhs_us_per_free,\n"
+    "jac_us_per_free.\n"
+    "\n"
+    "Exit status: 0 done (failed or timed-out points are data, not errors),\n"
+    "1 invalid input, 2 bad command line, 3 I/O error, 4 the reference run\n"
+    "failed, 5 out of memory.\n";
+
+/* Column names of the CSV (the contract, --help and docs/performance.md). */
+static const char *const bench_columns[] = {
+    "role", "scene", "fabric", "particles", "free_particles", "size_m", "t_end_s",
+    "samples", "integrator", "default", "linear_solver", "rtol", "atol_m", "status",
+    "wall_s", "cpu_s", "repeats", "steps", "rhs_evals", "jac_evals", "lin_setups",
+    "lin_factors", "nonlin_iters", "err_test_fails", "conv_fails", "err_pos_rel",
+    "err_pos_rms_rel", "err_final_rel", "err_final_v_rel", "dc", "dc_ref", "err_dc",
+    "nodes", "message", NULL};
+
+static const char *const kernel_columns[] = {
+    "side", "particles", "free_particles", "nnz_K", "rhs_ms", "jac_ms",
+    "jac_first_order_ms", "schur_factor_ms", "rhs_us_per_free", "jac_us_per_free",
+    NULL};
+
+typedef enum pt_status { PT_OK, PT_FAILED, PT_TIMEOUT, PT_SKIPPED } pt_status;
+
+static const char *pt_status_name(int s)
+{
+    switch (s) {
+    case PT_OK: return "ok";
+    case PT_FAILED: return "failed";
+    case PT_TIMEOUT: return "timeout";
+    default: return "skipped";
+    }
+}
+
+/* One measured point: a fixed-size record, also the child -> parent message. */
+typedef struct bench_point {
+    char role[16];
+    int status;     /* pt_status */
+    int err_kind;   /* drape_error_kind of a failure */
+    char integrator[DRAPE_INTEGRATOR_NAME_MAX];
+    double rtol, atol;
+    double wall_s, cpu_s;
+    int repeats;
+    drape_integrator_stats stats;
+    double err_pos, err_pos_rms, err_final, err_final_v;
+    double dc;
+    int nodes;      /* -1 = none */
+    char msg[DRAPE_ERROR_MSG_MAX + DRAPE_ERROR_FILE_MAX];
+} bench_point;
+
+typedef struct bench {
+    const char *scene_path;
+    drape_scene s;
+    drape_fabric f;
+    drape_lattice *L;
+    drape_model *m;
+    size_t n3;
+    double size;      /* m: largest extent of the rest lattice */
+    double t_end;     /* s */
+    int samples;      /* K */
+    double atol_scale;
+    int linsol;
+    int repeat;
+    double max_wall, ref_max_wall;
+    int has_dc;
+    char default_name[DRAPE_INTEGRATOR_NAME_MAX];
+    double *ref_x;    /* K x 3n: reference positions at t_k, k = 1..K */
+    double *ref_v;    /* 3n: reference velocities at t_end */
+    double ref_dc;
+    int progress;
+    /* output */
+    bench_point *rows;
+    int n_rows, cap_rows;
+    const char *out_dir;
+    char csv_path[4096];
+} bench;
+
+/* ---- small helpers -------------------------------------------------------- */
+
+static int bench_usage_error(const char *fmt, const char *a)
+{
+    fputs("drape: ", stderr);
+    fprintf(stderr, fmt, a);
+    fputs("\nTry `drape bench --help'.\n", stderr);
+    return drape_error_exit_status(DRAPE_E_USAGE);
+}
+
+static int bench_quantity(const char *opt, const char *text, drape_dim dim, double *v)
+{
+    char why[256];
+    if (drape_units_parse(text, dim, v, why, sizeof why) != 0) {
+        fprintf(stderr, "drape: %s: %s\nTry `drape bench --help'.\n", opt, why);
+        return -1;
+    }
+    return 0;
+}
+
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double mono_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Split a comma-separated list in place: up to max items. -1 if too many
+ * or an item is empty. */
+static int split_list(char *text, char **items, int max)
+{
+    int n = 0;
+    for (char *p = text;;) {
+        char *c = strchr(p, ',');
+        if (c) *c = 0;
+        if (!*p || n == max) return -1;
+        items[n++] = p;
+        if (!c) break;
+        p = c + 1;
+    }
+    return n;
+}
+
+/* --rtols: "a,b,c" or "HI:LO:N".  Values sorted from loose to tight. */
+static int parse_rtols(const char *text, double *out, int max)
+{
+    char buf[512];
+    int n = 0;
+    if (strlen(text) >= sizeof buf) return -1;
+    snprintf(buf, sizeof buf, "%s", text);
+    if (strchr(buf, ':')) {
+        char *end;
+        double hi = strtod(buf, &end);
+        if (*end != ':') return -1;
+        double lo = strtod(end + 1, &end);
+        if (*end != ':') return -1;
+        long per = strtol(end + 1, &end, 10);
+        if (*end || per < 1 || per > 8 || !(hi > 0 && hi < 1) || !(lo > 0 && lo <= hi))
+            return -1;
+        double decades = log10(hi / lo);
+        long k_max = (long)floor(decades * (double)per + 1e-9);
+        for (long k = 0; k <= k_max; k++) {
+            if (n == max) return -1;
+            double e = log10(hi) - (double)k / (double)per;
+            double v = pow(10.0, e);
+            /* keep three significant digits so names print cleanly */
+            char t[32];
+            snprintf(t, sizeof t, "%.3g", v);
+            out[n++] = strtod(t, NULL);
+        }
+    } else {
+        char *items[BENCH_MAX_LIST];
+        int k = split_list(buf, items, BENCH_MAX_LIST < max ? BENCH_MAX_LIST : max);
+        if (k < 0) return -1;
+        for (int i = 0; i < k; i++) {
+            char *end;
+            double v = strtod(items[i], &end);
+            if (*end || !(v > 0 && v < 1)) return -1;
+            out[n++] = v;
+        }
+    }
+    /* loose to tight */
+    for (int i = 1; i < n; i++)
+        for (int j = i; j > 0 && out[j] > out[j - 1]; j--) {
+            double t = out[j];
+            out[j] = out[j - 1];
+            out[j - 1] = t;
+        }
+    return n;
+}
+
+static int integrator_known(const char *name)
+{
+    for (int i = 0; drape_integrator_names[i]; i++)
+        if (strcmp(drape_integrator_names[i], name) == 0) return 1;
+    return 0;
+}
+
+/* ---- errors against the reference ------------------------------------------ */
+
+/* Positions of sample k (1..K) in a K x 3n array. */
+static const double *sample_at(const bench *b, const double *xs, int k)
+{
+    return xs + (size_t)(k - 1) * b->n3;
+}
+
+static void compute_errors(const bench *b, const double *xs, const double *v_end,
+                           bench_point *p)
+{
+    const drape_lattice *L = b->L;
+    double emax = 0.0, erms = 0.0, efin = 0.0, evfin = 0.0;
+    for (int k = 1; k <= b->samples; k++) {
+        const double *a = sample_at(b, xs, k), *r = sample_at(b, b->ref_x, k);
+        double mx = 0.0, ss = 0.0;
+        for (int i = 0; i < L->n; i++) {
+            double dx = a[3 * i] - r[3 * i], dy = a[3 * i + 1] - r[3 * i + 1],
+                   dz = a[3 * i + 2] - r[3 * i + 2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            ss += d2;
+            if (d2 > mx) mx = d2;
+        }
+        mx = sqrt(mx);
+        double rms = L->n > 0 ? sqrt(ss / L->n) : 0.0;
+        if (mx > emax) emax = mx;
+        if (rms > erms) erms = rms;
+        if (k == b->samples) efin = mx;
+    }
+    for (int i = 0; i < L->n; i++) {
+        double dx = v_end[3 * i] - b->ref_v[3 * i], dy = v_end[3 * i + 1] - b->ref_v[3 * i + 1],
+               dz = v_end[3 * i + 2] - b->ref_v[3 * i + 2];
+        double d = sqrt(dx * dx + dy * dy + dz * dz);
+        if (d > evfin) evfin = d;
+    }
+    p->err_pos = emax / b->size;
+    p->err_pos_rms = erms / b->size;
+    p->err_final = efin / b->size;
+    p->err_final_v = evfin / sqrt(DRAPE_G_STANDARD * b->size);
+}
+
+/* ---- one run, in a child ------------------------------------------------------ */
+
+typedef struct sample_ctx {
+    const bench *b;
+    double dt;
+    double *xs;   /* K x 3n */
+    int got;      /* samples stored */
+} sample_ctx;
+
+static int sample_observer(void *ctx, const drape_sim_event *ev, drape_error *err)
+{
+    (void)err;
+    sample_ctx *c = ctx;
+    if (!(ev->what & DRAPE_SIM_AT_FRAME)) return 0;
+    long k = lround(ev->t / c->dt);
+    if (k < 1 || k > c->b->samples) return 0;
+    memcpy(c->xs + (size_t)(k - 1) * c->b->n3, ev->x, sizeof(double) * c->b->n3);
+    c->got++;
+    return 0;
+}
+
+static int write_all(int fd, const void *buf, size_t n)
+{
+    const char *p = buf;
+    while (n > 0) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            return -1;
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+static void point_error(bench_point *p, const drape_error *e)
+{
+    char buf[sizeof p->msg];
+    p->status = PT_FAILED;
+    p->err_kind = e->kind;
+    snprintf(p->msg, sizeof p->msg, "%s", drape_error_format(e, buf, sizeof buf));
+}
+
+/* The child's work: integrate, measure, write the record (and, with
+ * want_samples, the K samples and the final velocities) to fd. */
+static void child_run(const bench *b, const char *integrator, double rtol,
+                      int want_samples, int fd)
+{
+    bench_point p;
+    memset(&p, 0, sizeof p);
+    p.status = PT_OK;
+    p.nodes = -1;
+    p.err_pos = p.err_pos_rms = p.err_final = p.err_final_v = p.dc = NAN;
+    snprintf(p.integrator, sizeof p.integrator, "%s", integrator);
+    p.rtol = rtol;
+    p.atol = rtol * b->atol_scale;
+    p.repeats = 1;
+    drape_error err;
+    drape_error_clear(&err);
+    drape_sim_result r;
+    memset(&r, 0, sizeof r);
+    sample_ctx sc = {b, b->t_end / b->samples, NULL, 0};
+    sc.xs = drape_malloc(sizeof(double) * b->n3 * (size_t)b->samples);
+    if (!sc.xs) {
+        drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory for the samples");
+        point_error(&p, &err);
+        goto send;
+    }
+    drape_sim_opts so;
+    drape_sim_opts_from_scene(&b->s, &so);
+    snprintf(so.integrator, sizeof so.integrator, "%s", integrator);
+    so.rtol = rtol;
+    so.atol = p.atol;
+    so.t_max = b->t_end;
+    so.has_equilibrium = 0;
+    so.frame_every = sc.dt;
+    so.linsol = b->linsol;
+    so.observe_progress = 0;
+    double c0 = cpu_now();
+    int rc = drape_sim_run(b->m, &so, sample_observer, &sc, &r, &err);
+    p.cpu_s = cpu_now() - c0;
+    p.wall_s = r.wall_s;
+    p.stats = r.stats;
+    if (r.integrator[0]) snprintf(p.integrator, sizeof p.integrator, "%s", r.integrator);
+    if (rc != 0) {
+        point_error(&p, &err);
+        goto send;
+    }
+    if (sc.got != b->samples) {
+        drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                        "bench: %d of %d sample times seen", sc.got, b->samples);
+        point_error(&p, &err);
+        goto send;
+    }
+    if (b->ref_x) compute_errors(b, sc.xs, r.v, &p);
+    if (b->has_dc) {
+        drape_shadow sh;
+        drape_error e2;
+        drape_error_clear(&e2);
+        if (drape_shadow_measure(b->L, r.x, &sh, &e2) == 0) {
+            p.dc = sh.dc;
+            p.nodes = sh.nodes;
+        } else {
+            snprintf(p.msg, sizeof p.msg, "DC: %s", e2.msg);
+        }
+    }
+send:
+    if (write_all(fd, &p, sizeof p) == 0 && want_samples && p.status == PT_OK) {
+        if (write_all(fd, sc.xs, sizeof(double) * b->n3 * (size_t)b->samples) == 0)
+            write_all(fd, r.v, sizeof(double) * b->n3);
+    }
+    drape_free(sc.xs);
+    drape_sim_result_free(&r);
+}
+
+/* Read n bytes from fd before the deadline (monotonic s; <= 0: none).
+ * 0 done, 1 timeout, -1 end of file or error. */
+static int read_until(int fd, void *buf, size_t n, double deadline)
+{
+    char *p = buf;
+    while (n > 0) {
+        int ms = -1;
+        if (deadline > 0) {
+            double left = deadline - mono_now();
+            if (left <= 0) return 1;
+            ms = left > 1e6 ? 1000000000 : (int)ceil(left * 1000.0);
+        }
+        struct pollfd pf = {fd, POLLIN, 0};
+        int pr = poll(&pf, 1, ms);
+        if (pr < 0) {
+            if (errno == EINTR) continue;
+            return -1;
+        }
+        if (pr == 0) return 1;
+        ssize_t got = read(fd, p, n);
+        if (got < 0) {
+            if (errno == EINTR) continue;
+            return -1;
+        }
+        if (got == 0) return -1;
+        p += got;
+        n -= (size_t)got;
+    }
+    return 0;
+}
+
+/* Run one point in a child with a wall-time limit (0 = none).  With xs/v
+ * non-NULL, receive the samples too.  Returns 0, or -1 if the child could
+ * not be started (err set). */
+static int run_point(const bench *b, const char *integrator, double rtol, double limit,
+                     double *xs, double *v, bench_point *p, drape_error *err)
+{
+    int fds[2];
+    if (pipe(fds) != 0)
+        return drape_error_set(err, DRAPE_E_IO, NULL, 0, 0, NULL, "pipe: %s", strerror(errno));
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fds[0]);
+        close(fds[1]);
+        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "fork: %s", strerror(errno));
+    }
+    if (pid == 0) {
+        close(fds[0]);
+        child_run(b, integrator, rtol, xs != NULL, fds[1]);
+        close(fds[1]);
+        _exit(0);
+    }
+    close(fds[1]);
+    double deadline = limit > 0 ? mono_now() + limit : 0.0;
+    int rr = read_until(fds[0], p, sizeof *p, deadline);
+    if (rr == 0 && p->status == PT_OK && xs) {
+        rr = read_until(fds[0], xs, sizeof(double) * b->n3 * (size_t)b->samples, deadline);
+        if (rr == 0) rr = read_until(fds[0], v, sizeof(double) * b->n3, deadline);
+    }
+    close(fds[0]);
+    if (rr == 1) kill(pid, SIGKILL);
+    int wst = 0;
+    while (waitpid(pid, &wst, 0) < 0 && errno == EINTR) {}
+    if (rr != 0) {
+        memset(p, 0, sizeof *p);
+        snprintf(p->integrator, sizeof p->integrator, "%s", integrator);
+        p->rtol = rtol;
+        p->atol = rtol * b->atol_scale;
+        p->nodes = -1;
+        p->err_pos = p->err_pos_rms = p->err_final = p->err_final_v = p->dc = NAN;
+        p->wall_s = p->cpu_s = NAN;
+        p->stats.steps = p->stats.rhs_evals = p->stats.jac_evals = -1;
+        p->stats.lin_setups = p->stats.lin_factors = p->stats.nonlin_iters = -1;
+        p->stats.err_test_fails = p->stats.conv_fails = -1;
+        if (rr == 1) {
+            p->status = PT_TIMEOUT;
+            p->wall_s = limit;
+            snprintf(p->msg, sizeof p->msg, "stopped after %g s of wall time (--max-wall)", limit);
+        } else {
+            p->status = PT_FAILED;
+            p->err_kind = DRAPE_E_INTERNAL;
+            if (WIFSIGNALED(wst))
+                snprintf(p->msg, sizeof p->msg, "the run was killed by signal %d%s",
+                         WTERMSIG(wst), WTERMSIG(wst) == SIGKILL ? " (out of memory?)" : "");
+            else
+                snprintf(p->msg, sizeof p->msg, "the run ended without a result");
+        }
+    }
+    return 0;
+}
+
+/* ---- output ------------------------------------------------------------------------ */
+
+static void put_num(FILE *o, double v)
+{
+    if (isfinite(v)) fprintf(o, "%.6g", v);
+}
+static void put_count(FILE *o, long v)
+{
+    if (v >= 0) fprintf(o, "%ld", v);
+}
+
+static void write_header(FILE *o, const char *const *cols)
+{
+    for (int i = 0; cols[i]; i++) fprintf(o, "%s%s", i ? "," : "", cols[i]);
+    fputc('\n', o);
+}
+
+static void write_row(FILE *o, const bench *b, const bench_point *p)
+{
+    const drape_lattice *L = b->L;
+    const drape_integrator_stats *st = &p->stats;
+    int implicit = st->linsol > 0;
+    fprintf(o, "%s,", p->role);
+    drape_cli_csv_put(o, drape_scene_kind_name(b->s.kind));
+    fputc(',', o);
+    drape_cli_csv_put(o, b->f.name);
+    fprintf(o, ",%d,%d,", L->n, L->n_free);
+    put_num(o, b->size);
+    fputc(',', o);
+    put_num(o, b->t_end);
+    fprintf(o, ",%d,%s,%d,%s,", b->samples, p->integrator,
+            strcmp(p->integrator, b->default_name) == 0,
+            implicit ? drape_linsol_name(st->linsol) : "none");
+    put_num(o, p->rtol);
+    fputc(',', o);
+    put_num(o, p->atol);
+    fprintf(o, ",%s,", pt_status_name(p->status));
+    put_num(o, p->wall_s);
+    fputc(',', o);
+    put_num(o, p->cpu_s);
+    fputc(',', o);
+    if (p->status == PT_OK) fprintf(o, "%d", p->repeats);
+    const long c[8] = {st->steps, st->rhs_evals, st->jac_evals, st->lin_setups,
+                       st->lin_factors, st->nonlin_iters, st->err_test_fails, st->conv_fails};
+    for (int i = 0; i < 8; i++) {
+        fputc(',', o);
+        if (p->status != PT_SKIPPED) put_count(o, c[i]);
+    }
+    const double e[4] = {p->err_pos, p->err_pos_rms, p->err_final, p->err_final_v};
+    for (int i = 0; i < 4; i++) {
+        fputc(',', o);
+        put_num(o, e[i]);
+    }
+    fputc(',', o);
+    put_num(o, p->dc);
+    fputc(',', o);
+    if (b->has_dc) put_num(o, b->ref_dc);
+    fputc(',', o);
+    if (isfinite(p->dc) && isfinite(b->ref_dc) && strcmp(p->role, "ref") != 0)
+        put_num(o, fabs(p->dc - b->ref_dc));
+    fputc(',', o);
+    if (p->nodes >= 0) fprintf(o, "%d", p->nodes);
+    fputc(',', o);
+    drape_cli_csv_put(o, p->msg);
+    fputc('\n', o);
+}
+
+/* Rewrite DIR/NAME.csv with every row so far (atomic replacement). */
+static int flush_csv(bench *b, drape_error *err)
+{
+    if (!b->out_dir) return 0;
+    drape_cli_afile a;
+    if (drape_cli_afile_open(&a, b->csv_path, err) != 0) return -1;
+    write_header(a.f, bench_columns);
+    for (int i = 0; i < b->n_rows; i++) write_row(a.f, b, &b->rows[i]);
+    return drape_cli_afile_commit(&a, err);
+}
+
+static int add_row(bench *b, const bench_point *p, drape_error *err)
+{
+    if (b->n_rows == b->cap_rows) {
+        int cap = b->cap_rows ? 2 * b->cap_rows : 64;
+        bench_point *nr = drape_realloc(b->rows, sizeof *nr * (size_t)cap);
+        if (!nr) return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+        b->rows = nr;
+        b->cap_rows = cap;
+    }
+    b->rows[b->n_rows++] = *p;
+    if (!b->out_dir) {
+        write_row(stdout, b, p);
+        if (fflush(stdout) != 0)
+            return drape_error_set(err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the CSV");
+        return 0;
+    }
+    return flush_csv(b, err);
+}
+
+static void progress(const bench *b, const bench_point *p)
+{
+    if (!b->progress) return;
+    fprintf(stderr, "drape: bench %-9s %-11s rtol %-8.3g %-7s", p->role, p->integrator,
+            p->rtol, pt_status_name(p->status));
+    if (p->status == PT_OK)
+        fprintf(stderr, " wall %.3g s, cpu %.3g s, err_pos %.3g", p->wall_s, p->cpu_s, p->err_pos);
+    else if (p->msg[0])
+        fprintf(stderr, " %.120s", p->msg);
+    fputc('\n', stderr);
+}
+
+static int ensure_dir(const char *dir, drape_error *err)
+{
+    struct stat st;
+    if (stat(dir, &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return 0;
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: not a directory");
+    }
+    if (mkdir(dir, 0777) != 0)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "--out: cannot create directory: %s", strerror(errno));
+    return 0;
+}
+
+/* File name stem: --name, or the scene file's base name without .yaml/.yml. */
+static void csv_path(bench *b, const char *name, const char *fallback)
+{
+    char stem[256];
+    if (name) {
+        snprintf(stem, sizeof stem, "%s", name);
+    } else {
+        const char *base = strrchr(fallback, '/');
+        base = base ? base + 1 : fallback;
+        snprintf(stem, sizeof stem, "%s", base);
+        char *dot = strrchr(stem, '.');
+        if (dot && (strcmp(dot, ".yaml") == 0 || strcmp(dot, ".yml") == 0)) *dot = 0;
+    }
+    snprintf(b->csv_path, sizeof b->csv_path, "%s/%s.csv", b->out_dir, stem);
+}
+
+/* ---- the sweep ------------------------------------------------------------------- */
+
+static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, int n_rtols,
+                     char **ref, const double *ref_rtol, drape_error *err)
+{
+    bench_point p;
+    /* the reference */
+    b->ref_x = drape_malloc(sizeof(double) * b->n3 * (size_t)b->samples);
+    b->ref_v = drape_malloc(sizeof(double) * (b->n3 ? b->n3 : 1));
+    if (!b->ref_x || !b->ref_v)
+        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL,
+                               "out of memory for the reference samples");
+    double *rx = b->ref_x;
+    b->ref_x = NULL; /* the reference child computes no errors */
+    if (run_point(b, ref[0], ref_rtol[0], b->ref_max_wall, rx, b->ref_v, &p, err) != 0) {
+        b->ref_x = rx;
+        return -1;
+    }
+    b->ref_x = rx;
+    snprintf(p.role, sizeof p.role, "ref");
+    b->ref_dc = p.dc;
+    if (p.status == PT_OK) p.err_pos = p.err_pos_rms = p.err_final = p.err_final_v = 0.0;
+    progress(b, &p);
+    if (add_row(b, &p, err) != 0) return -1;
+    if (p.status != PT_OK)
+        return drape_error_set(err, p.status == PT_FAILED && p.err_kind == DRAPE_E_NOMEM
+                                        ? DRAPE_E_NOMEM : DRAPE_E_NUMERIC,
+                               NULL, 0, 0, NULL, "reference run %s at rtol %g: %s: %s", ref[0],
+                               ref_rtol[0], pt_status_name(p.status), p.msg);
+    /* the second reference, measured against the first */
+    if (run_point(b, ref[1], ref_rtol[1], b->ref_max_wall, NULL, NULL, &p, err) != 0) return -1;
+    snprintf(p.role, sizeof p.role, "ref-check");
+    progress(b, &p);
+    if (add_row(b, &p, err) != 0) return -1;
+    double agree = p.status == PT_OK ? p.err_pos : NAN;
+    if (!isfinite(agree))
+        fprintf(stderr, "drape: warning: the reference check %s did not finish (%s); the "
+                        "reference is not confirmed\n", ref[1], pt_status_name(p.status));
+
+    double smallest = INFINITY;
+    for (int ii = 0; ii < n_integ; ii++) {
+        int skip = 0;
+        for (int k = 0; k < n_rtols; k++) {
+            if (skip) {
+                memset(&p, 0, sizeof p);
+                snprintf(p.integrator, sizeof p.integrator, "%s", integ[ii]);
+                if (strcmp(integ[ii], "auto") == 0)
+                    snprintf(p.integrator, sizeof p.integrator, "%s", b->default_name);
+                p.rtol = rtols[k];
+                p.atol = rtols[k] * b->atol_scale;
+                p.status = PT_SKIPPED;
+                p.nodes = -1;
+                p.err_pos = p.err_pos_rms = p.err_final = p.err_final_v = p.dc = NAN;
+                p.wall_s = p.cpu_s = NAN;
+                snprintf(p.msg, sizeof p.msg, "a looser tolerance already timed out or ran out of memory");
+            } else {
+                if (run_point(b, integ[ii], rtols[k], b->max_wall, NULL, NULL, &p, err) != 0)
+                    return -1;
+                for (int rep = 1; rep < b->repeat && p.status == PT_OK &&
+                                  p.wall_s < BENCH_REPEAT_BELOW_S; rep++) {
+                    bench_point q;
+                    if (run_point(b, integ[ii], rtols[k], b->max_wall, NULL, NULL, &q, err) != 0)
+                        return -1;
+                    if (q.status != PT_OK) break;
+                    if (q.wall_s < p.wall_s) p.wall_s = q.wall_s;
+                    if (q.cpu_s < p.cpu_s) p.cpu_s = q.cpu_s;
+                    p.repeats++;
+                }
+                if (p.status == PT_TIMEOUT ||
+                    (p.status == PT_FAILED && p.err_kind == DRAPE_E_NOMEM))
+                    skip = 1;
+                if (p.status == PT_OK && p.err_pos > 0 && p.err_pos < smallest)
+                    smallest = p.err_pos;
+            }
+            snprintf(p.role, sizeof p.role, "sweep");
+            progress(b, &p);
+            if (add_row(b, &p, err) != 0) return -1;
+        }
+    }
+    if (isfinite(agree) && isfinite(smallest) && agree > 0.01 * smallest)
+        fprintf(stderr, "drape: warning: the reference pair agrees to %.3g (err_pos_rel), more "
+                        "than 1/100 of the smallest error measured (%.3g); tighten --ref-rtol\n",
+                agree, smallest);
+    return 0;
+}
+
+/* ---- kernels ------------------------------------------------------------------------ */
+
+enum { K_RHS, K_JAC, K_JAC1, K_SCHUR };
+
+typedef struct kernel_ctx {
+    drape_model *m;
+    const double *x, *v;
+    double *f, *K, *D, *J;
+    drape_schur *schur;
+} kernel_ctx;
+
+static int kernel_call(kernel_ctx *c, int which, drape_error *err)
+{
+    switch (which) {
+    case K_RHS: return drape_model_forces(c->m, DRAPE_PART_ALL, c->x, c->v, c->f);
+    case K_JAC: return drape_model_jacobian(c->m, DRAPE_PART_ALL, c->x, c->v, c->K, c->D);
+    case K_JAC1:
+        return drape_model_jacobian_first_order(c->m, DRAPE_PART_ALL, 1, c->x, c->v, c->J);
+    default: return drape_schur_factor(c->schur, c->K, c->D, BENCH_KERNEL_GAMMA, err);
+    }
+}
+
+/* CPU seconds per call: minimum over BENCH_KERNEL_BATCHES batches of at
+ * least BENCH_KERNEL_MIN_BATCH_S each (after one warm-up call). */
+static double kernel_time(kernel_ctx *c, int which, drape_error *err)
+{
+    if (kernel_call(c, which, err) != 0) return NAN;
+    double best = INFINITY;
+    for (int bt = 0; bt < BENCH_KERNEL_BATCHES; bt++) {
+        long calls = 0;
+        double t0 = cpu_now(), t;
+        do {
+            if (kernel_call(c, which, err) != 0) return NAN;
+            calls++;
+            t = cpu_now() - t0;
+        } while (t < BENCH_KERNEL_MIN_BATCH_S);
+        if (t / (double)calls < best) best = t / (double)calls;
+    }
+    return best;
+}
+
+static int kernels_one(const drape_scene *s0, const drape_fabric *f, int side, FILE *o,
+                       int progress_on, drape_error *err)
+{
+    drape_scene s = *s0;
+    drape_lattice *L = NULL;
+    drape_model *m = NULL;
+    drape_schur *schur = NULL;
+    double *x = NULL, *v = NULL, *fv = NULL, *K = NULL, *D = NULL, *J = NULL, *im = NULL;
+    int rc = -1;
+    s.shape = DRAPE_SHAPE_RECTANGLE;
+    s.width = s.height = (side - 1) * s.spacing;
+    if (drape_scene_check_with_fabric(&s, f, err) != 0) goto out;
+    L = drape_lattice_new(&s, f, err);
+    if (!L) goto out;
+    drape_model_opts mo;
+    drape_model_opts_from_scene(&s, &mo);
+    m = drape_model_new(L, f, &mo, err);
+    if (!m) goto out;
+    size_t n3 = 3 * (size_t)L->n;
+    const drape_pattern *P = drape_model_pattern(m);
+    const drape_pattern *P1 = drape_model_pattern_first_order(m);
+    x = drape_malloc(sizeof(double) * n3);
+    v = drape_malloc(sizeof(double) * n3);
+    fv = drape_malloc(sizeof(double) * n3);
+    K = drape_malloc(sizeof(double) * (size_t)(P->nnz ? P->nnz : 1));
+    D = drape_malloc(sizeof(double) * (size_t)(P->nnz ? P->nnz : 1));
+    J = drape_malloc(sizeof(double) * (size_t)(P1->nnz ? P1->nnz : 1));
+    im = drape_malloc(sizeof(double) * (size_t)(L->n_free ? L->n_free : 1));
+    if (!x || !v || !fv || !K || !D || !J || !im) {
+        drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+        goto out;
+    }
+    /* a deterministic state off the flat rest state: smooth waves of 2 % of
+     * the spacing in z and 0.5 % in-plane, small velocities */
+    for (int i = 0; i < L->n; i++) {
+        double gi = L->gi[i], gj = L->gj[i];
+        double a = 0.02 * s.spacing, w = 0.5 * sin(0.37 * gi + 0.11) * cos(0.23 * gj + 0.7);
+        x[3 * i] = L->xinit[3 * i] + 0.25 * a * sin(0.51 * gj + 0.3);
+        x[3 * i + 1] = L->xinit[3 * i + 1] + 0.25 * a * cos(0.43 * gi);
+        x[3 * i + 2] = L->xinit[3 * i + 2] + a * w;
+        v[3 * i] = 1e-3 * w;
+        v[3 * i + 1] = -1e-3 * w;
+        v[3 * i + 2] = 1e-2 * w;
+        if (L->free_id[i] >= 0) im[L->free_id[i]] = 1.0 / L->mass[i];
+    }
+    schur = drape_schur_new(P, im, err);
+    if (!schur) goto out;
+    kernel_ctx c = {m, x, v, fv, K, D, J, schur};
+    double t[4];
+    for (int k = 0; k < 4; k++) {
+        if (k == K_SCHUR && kernel_call(&c, K_JAC, err) != 0) {
+            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL, "Jacobian failed");
+            goto out;
+        }
+        t[k] = kernel_time(&c, k, err);
+        if (!isfinite(t[k])) {
+            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                            "kernel %d failed on the %d x %d lattice", k, side, side);
+            goto out;
+        }
+    }
+    fprintf(o, "%d,%d,%d,%ld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", side, L->n, L->n_free,
+            (long)P->nnz, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_JAC1], 1e3 * t[K_SCHUR],
+            1e6 * t[K_RHS] / L->n_free, 1e6 * t[K_JAC] / L->n_free);
+    if (progress_on)
+        fprintf(stderr, "drape: bench kernels %d x %d: rhs %.3g ms, jac %.3g ms, schur %.3g ms\n",
+                side, side, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_SCHUR]);
+    rc = 0;
+out:
+    drape_schur_free(schur);
+    drape_free(x);
+    drape_free(v);
+    drape_free(fv);
+    drape_free(K);
+    drape_free(D);
+    drape_free(J);
+    drape_free(im);
+    drape_model_free(m);
+    drape_lattice_free(L);
+    return rc;
+}
+
+static int run_kernels(const drape_scene *s, const drape_fabric *f, const int *sizes,
+                       int n_sizes, const char *out_dir, const char *name, int progress_on,
+                       drape_error *err)
+{
+    drape_cli_afile a;
+    FILE *o = stdout;
+    char path[4096];
+    if (out_dir) {
+        if (ensure_dir(out_dir, err) != 0) return -1;
+        snprintf(path, sizeof path, "%s/%s.csv", out_dir, name ? name : "kernels");
+        if (drape_cli_afile_open(&a, path, err) != 0) return -1;
+        o = a.f;
+    }
+    write_header(o, kernel_columns);
+    for (int i = 0; i < n_sizes; i++) {
+        if (kernels_one(s, f, sizes[i], o, progress_on, err) != 0) {
+            if (out_dir) drape_cli_afile_abort(&a);
+            return -1;
+        }
+        if (!out_dir) fflush(stdout);
+    }
+    if (out_dir) return drape_cli_afile_commit(&a, err);
+    if (fflush(stdout) != 0)
+        return drape_error_set(err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the CSV");
+    return 0;
+}
+
+/* ---- entry ---------------------------------------------------------------------------- */
+
+int drape_cli_bench(int argc, char **argv)
+{
+    enum { O_FABRIC = 1000, O_SPACING, O_INTEG, O_RTOLS, O_ATOL_SCALE, O_LINSOL, O_TEND,
+           O_SAMPLES, O_REPEAT, O_MAXWALL, O_REF, O_REFRTOL, O_REFMAXWALL, O_OUT, O_NAME,
+           O_KERNELS, O_SIZES };
+    static const struct option opts[] = {
+        {"fabric", required_argument, NULL, O_FABRIC},
+        {"spacing", required_argument, NULL, O_SPACING},
+        {"integrators", required_argument, NULL, O_INTEG},
+        {"rtols", required_argument, NULL, O_RTOLS},
+        {"atol-scale", required_argument, NULL, O_ATOL_SCALE},
+        {"linear-solver", required_argument, NULL, O_LINSOL},
+        {"t-end", required_argument, NULL, O_TEND},
+        {"samples", required_argument, NULL, O_SAMPLES},
+        {"repeat", required_argument, NULL, O_REPEAT},
+        {"max-wall", required_argument, NULL, O_MAXWALL},
+        {"ref", required_argument, NULL, O_REF},
+        {"ref-rtol", required_argument, NULL, O_REFRTOL},
+        {"ref-max-wall", required_argument, NULL, O_REFMAXWALL},
+        {"out", required_argument, NULL, O_OUT},
+        {"name", required_argument, NULL, O_NAME},
+        {"kernels", no_argument, NULL, O_KERNELS},
+        {"sizes", required_argument, NULL, O_SIZES},
+        {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0}};
+    static char integ_buf[512], ref_buf[128], sizes_buf[512];
+    const char *fabric_path = NULL, *out_dir = NULL, *name = NULL;
+    const char *integ_text = NULL, *ref_text = BENCH_DEFAULT_REF, *sizes_text = BENCH_DEFAULT_SIZES;
+    const char *rtols_text = BENCH_DEFAULT_RTOLS;
+    double spacing = 0, t_end = 0, atol_scale = BENCH_DEFAULT_ATOL_SCALE;
+    double max_wall = BENCH_DEFAULT_MAX_WALL, ref_max_wall = 0;
+    double ref_rtol[2] = {BENCH_DEFAULT_REF_RTOL, BENCH_DEFAULT_REF_RTOL};
+    long samples = BENCH_DEFAULT_SAMPLES, repeat = BENCH_DEFAULT_REPEAT;
+    int linsol = 0, quiet = 0, kernels = 0, c;
+    char *end;
+    while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
+        switch (c) {
+        case O_FABRIC: fabric_path = optarg; break;
+        case O_SPACING:
+            if (bench_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, &spacing)) return 2;
+            if (!(spacing > 0)) return bench_usage_error("--spacing: must be positive, got %s", optarg);
+            break;
+        case O_INTEG: integ_text = optarg; break;
+        case O_RTOLS: rtols_text = optarg; break;
+        case O_ATOL_SCALE:
+            if (bench_quantity("--atol-scale", optarg, DRAPE_DIM_LENGTH, &atol_scale)) return 2;
+            if (!(atol_scale > 0)) return bench_usage_error("--atol-scale: must be positive, got %s", optarg);
+            break;
+        case O_LINSOL:
+            if (drape_linsol_parse(optarg, &linsol) != 0)
+                return bench_usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'", optarg);
+            break;
+        case O_TEND:
+            if (bench_quantity("--t-end", optarg, DRAPE_DIM_TIME, &t_end)) return 2;
+            if (!(t_end > 0) || !isfinite(t_end)) return bench_usage_error("--t-end: must be positive, got %s", optarg);
+            break;
+        case O_SAMPLES:
+            errno = 0;
+            samples = strtol(optarg, &end, 10);
+            if (errno || *end || samples < 1 || samples > 10000)
+                return bench_usage_error("--samples: expected an integer in 1..10000, got `%s'", optarg);
+            break;
+        case O_REPEAT:
+            errno = 0;
+            repeat = strtol(optarg, &end, 10);
+            if (errno || *end || repeat < 1 || repeat > 1000)
+                return bench_usage_error("--repeat: expected an integer in 1..1000, got `%s'", optarg);
+            break;
+        case O_MAXWALL:
+        case O_REFMAXWALL: {
+            double w;
+            if (bench_quantity(c == O_MAXWALL ? "--max-wall" : "--ref-max-wall", optarg,
+                               DRAPE_DIM_TIME, &w)) return 2;
+            if (!(w >= 0) || !isfinite(w))
+                return bench_usage_error("--max-wall: must be a time >= 0, got %s", optarg);
+            if (c == O_MAXWALL) max_wall = w;
+            else ref_max_wall = w;
+            break;
+        }
+        case O_REF: ref_text = optarg; break;
+        case O_REFRTOL:
+            ref_rtol[0] = strtod(optarg, &end);
+            ref_rtol[1] = ref_rtol[0];
+            if (*end == ',') ref_rtol[1] = strtod(end + 1, &end);
+            if (*end || !(ref_rtol[0] > 0 && ref_rtol[0] < 1) || !(ref_rtol[1] > 0 && ref_rtol[1] < 1))
+                return bench_usage_error("--ref-rtol: expected X or X,Y in (0, 1), got %s", optarg);
+            break;
+        case O_OUT: out_dir = optarg; break;
+        case O_NAME:
+            if (!*optarg || strchr(optarg, '/'))
+                return bench_usage_error("--name: expected a file name stem, got `%s'", optarg);
+            name = optarg;
+            break;
+        case O_KERNELS: kernels = 1; break;
+        case O_SIZES: sizes_text = optarg; break;
+        case 'q': quiet = 1; break;
+        case 'h': fputs(bench_usage, stdout); return 0;
+        default:
+            fputs("Try `drape bench --help'.\n", stderr);
+            return drape_error_exit_status(DRAPE_E_USAGE);
+        }
+    }
+    if (argc - optind > 1)
+        return bench_usage_error("bench: one scene at a time, got `%s' and more", argv[optind]);
+
+    /* lists */
+    char *integ[BENCH_MAX_LIST], *ref[BENCH_MAX_LIST];
+    int n_integ = 0, n_ref;
+    if (integ_text) {
+        if (strlen(integ_text) >= sizeof integ_buf)
+            return bench_usage_error("--integrators: list too long%s", "");
+        snprintf(integ_buf, sizeof integ_buf, "%s", integ_text);
+        n_integ = split_list(integ_buf, integ, BENCH_MAX_LIST);
+        if (n_integ < 1) return bench_usage_error("--integrators: bad list `%s'", integ_text);
+    } else {
+        const drape_integrator_type *const *all = drape_integrator_types();
+        for (; all[n_integ] && n_integ < BENCH_MAX_LIST; n_integ++)
+            integ[n_integ] = (char *)all[n_integ]->name;
+    }
+    for (int i = 0; i < n_integ; i++)
+        if (!integrator_known(integ[i]))
+            return bench_usage_error("--integrators: unknown integrator `%s'; see `drape run --help'", integ[i]);
+    if (strlen(ref_text) >= sizeof ref_buf) return bench_usage_error("--ref: list too long%s", "");
+    snprintf(ref_buf, sizeof ref_buf, "%s", ref_text);
+    n_ref = split_list(ref_buf, ref, BENCH_MAX_LIST);
+    if (n_ref != 2) return bench_usage_error("--ref: expected two integrators A,B, got `%s'", ref_text);
+    for (int i = 0; i < 2; i++)
+        if (!integrator_known(ref[i]) || strcmp(ref[i], "auto") == 0)
+            return bench_usage_error("--ref: unknown integrator `%s'", ref[i]);
+    if (strcmp(ref[0], ref[1]) == 0)
+        return bench_usage_error("--ref: the two reference integrators must differ, got `%s' twice", ref[0]);
+    double rtols[BENCH_MAX_LIST];
+    int n_rtols = parse_rtols(rtols_text, rtols, BENCH_MAX_LIST);
+    if (n_rtols < 1)
+        return bench_usage_error("--rtols: expected values in (0, 1) as a,b,c or HI:LO:N, got `%s'", rtols_text);
+    int sizes[BENCH_MAX_LIST], n_sizes = 0;
+    {
+        if (strlen(sizes_text) >= sizeof sizes_buf) return bench_usage_error("--sizes: list too long%s", "");
+        snprintf(sizes_buf, sizeof sizes_buf, "%s", sizes_text);
+        char *items[BENCH_MAX_LIST];
+        n_sizes = split_list(sizes_buf, items, BENCH_MAX_LIST);
+        if (n_sizes < 1) return bench_usage_error("--sizes: bad list `%s'", sizes_text);
+        for (int i = 0; i < n_sizes; i++) {
+            long v = strtol(items[i], &end, 10);
+            if (*end || v < 2 || v > 2000)
+                return bench_usage_error("--sizes: expected integers in 2..2000, got `%s'", items[i]);
+            sizes[i] = (int)v;
+        }
+    }
+
+    const char *scene_path = optind < argc ? argv[optind]
+                             : kernels ? BENCH_KERNEL_SCENE : BENCH_DEFAULT_SCENE;
+    drape_error err;
+    drape_error_clear(&err);
+    bench b;
+    memset(&b, 0, sizeof b);
+    b.scene_path = scene_path;
+    b.progress = !quiet && isatty(STDERR_FILENO);
+    b.ref_dc = NAN;
+    int status = 0;
+
+    if (drape_scene_load(scene_path, &b.s, &err, drape_cli_warn, NULL) != 0) goto fail;
+    if (fabric_path) snprintf(b.s.fabric_path, sizeof b.s.fabric_path, "%s", fabric_path);
+    if (spacing > 0) b.s.spacing = spacing;
+    if (drape_fabric_load(b.s.fabric_path, &b.f, &err, drape_cli_warn, NULL) != 0) goto fail;
+
+    if (kernels) {
+        if (b.s.kind != DRAPE_SCENE_HANG) {
+            drape_error_set(&err, DRAPE_E_INPUT, scene_path, 0, 0, "scene",
+                            "--kernels needs a hang scene (square lattices), got %s",
+                            drape_scene_kind_name(b.s.kind));
+            goto fail;
+        }
+        if (run_kernels(&b.s, &b.f, sizes, n_sizes, out_dir, name, b.progress, &err) != 0)
+            goto fail;
+        goto out;
+    }
+
+    if (drape_scene_check_with_fabric(&b.s, &b.f, &err) != 0) goto fail;
+    b.L = drape_lattice_new(&b.s, &b.f, &err);
+    if (!b.L) goto fail;
+    drape_model_opts mo;
+    drape_model_opts_from_scene(&b.s, &mo);
+    b.m = drape_model_new(b.L, &b.f, &mo, &err);
+    if (!b.m) goto fail;
+    b.n3 = 3 * (size_t)b.L->n;
+    {
+        double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+        for (int i = 0; i < b.L->n; i++)
+            for (int d = 0; d < 2; d++) {
+                lo[d] = fmin(lo[d], b.L->x0[3 * i + d]);
+                hi[d] = fmax(hi[d], b.L->x0[3 * i + d]);
+            }
+        b.size = fmax(hi[0] - lo[0], hi[1] - lo[1]);
+        if (!(b.size > 0)) b.size = b.s.spacing;
+    }
+    b.t_end = t_end > 0 ? t_end : b.s.t_max;
+    b.samples = (int)samples;
+    b.atol_scale = atol_scale;
+    b.linsol = linsol;
+    b.repeat = (int)repeat;
+    b.max_wall = max_wall;
+    b.ref_max_wall = ref_max_wall;
+    b.has_dc = b.s.kind == DRAPE_SCENE_CUSICK || b.s.kind == DRAPE_SCENE_TABLE;
+    {
+        /* what `auto' resolves to for this model */
+        drape_integrator_opts io;
+        drape_integrator_opts_default(&io);
+        io.t_stop = b.t_end;
+        drape_integrator *I = drape_integrator_new(b.m, "auto", &io, &err);
+        if (!I) goto fail;
+        snprintf(b.default_name, sizeof b.default_name, "%s", drape_integrator_name(I));
+        drape_integrator_free(I);
+    }
+    b.out_dir = out_dir;
+    if (out_dir) {
+        if (ensure_dir(out_dir, &err) != 0) goto fail;
+        csv_path(&b, name, scene_path);
+    } else {
+        write_header(stdout, bench_columns);
+    }
+    if (run_sweep(&b, integ, n_integ, rtols, n_rtols, ref, ref_rtol, &err) != 0) goto fail;
+    if (out_dir && b.progress) fprintf(stderr, "drape: bench: wrote %s\n", b.csv_path);
+    goto out;
+fail:
+    drape_cli_print_error(&err);
+    status = drape_error_exit_status(err.kind);
+out:
+    drape_free(b.rows);
+    drape_free(b.ref_x);
+    drape_free(b.ref_v);
+    drape_model_free(b.m);
+    drape_lattice_free(b.L);
+    return status;
+}
