@@ -22,6 +22,7 @@
 #include "cli_io.h"
 #include "drape/alloc.h"
 #include "drape/fabric.h"
+#include "drape/integrator.h"
 #include "drape/scene.h"
 #include "drape/units.h"
 
@@ -49,7 +50,9 @@ static const char batch_usage[] =
     "  -h, --help           show this help\n"
     "Passed on to every run (see `drape run --help`):\n"
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
-    "  --t-max T, --max-steps N, --strain-limit X\n"
+    "  --t-max T, --max-steps N, --strain-limit X, --method dynamic|static,\n"
+    "  --linear-solver NAME (--method static: each fabric's certified\n"
+    "  equilibrium in about a second; docs/equilibrium.md)\n"
     "\n"
     "Progress goes to stderr only when it is a terminal.  The first interrupt\n"
     "(Ctrl-C) stops launching runs and waits for the running ones; a second\n"
@@ -98,7 +101,7 @@ typedef struct job {
 typedef struct batch {
     const char *scene;
     const char *dir;
-    const char *pass[16];        /* options passed on to `drape run` */
+    const char *pass[32];        /* options passed on to `drape run` (name, value) */
     int npass;
     int frames, progress;
     job *jobs;
@@ -561,7 +564,7 @@ static void make_name(batch *b, int k)
 int drape_cli_batch(int argc, char **argv)
 {
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
-           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN };
+           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -575,6 +578,8 @@ int drape_cli_batch(int argc, char **argv)
         {"t-max", required_argument, NULL, O_TMAX},
         {"max-steps", required_argument, NULL, O_MAXSTEPS},
         {"strain-limit", required_argument, NULL, O_STRAIN},
+        {"method", required_argument, NULL, O_METHOD},
+        {"linear-solver", required_argument, NULL, O_LINSOL},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -635,6 +640,18 @@ int drape_cli_batch(int argc, char **argv)
             if (check_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, 1)) return 2;
             name = "--strain-limit";
             break;
+        case O_METHOD:
+            if (strcmp(optarg, "dynamic") && strcmp(optarg, "static"))
+                return usage_error("--method: expected dynamic or static, got `%s'", optarg);
+            name = "--method";
+            break;
+        case O_LINSOL: {
+            int ls;
+            if (drape_linsol_parse(optarg, &ls) != 0)
+                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'", optarg);
+            name = "--linear-solver";
+            break;
+        }
         case O_MAXSTEPS: {
             char *end;
             errno = 0;

@@ -246,6 +246,43 @@ START_TEST(test_parallel_same_rows)
 }
 END_TEST
 
+/* --method and --linear-solver reach the runs: a static batch over the
+ * Cusick scene at 2 cm gives each fabric's certified minimum, the same
+ * row as `drape run` with the same options. */
+START_TEST(test_method_passed_on)
+{
+    const char *d = subdir("static");
+    char args[4096];
+    snprintf(args, sizeof args,
+             "batch -q ../scenes/cusick.yaml %s %s --spacing 2cm --method static "
+             "--linear-solver klu --out %s", COTTON, DENIM, d);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(d, t);
+    ck_assert_int_eq(t->nrow, 2);
+    for (int r = 0; r < 2; r++) {
+        ck_assert_str_eq(cell(t, r, "method"), "static");
+        ck_assert_str_eq(cell(t, r, "status"), "equilibrium");
+        ck_assert_str_eq(cell(t, r, "certified"), "minimum");
+    }
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --fabric " COTTON
+                                  " --spacing 2cm --method static --format csv",
+                                  out, CAP, err, CAP), 0);
+    char *nl = strchr(out, '\n');
+    ck_assert_ptr_nonnull(nl);
+    char *hdr[MAXF], *row[MAXF];
+    *nl = 0;
+    int nh = split(out, hdr, MAXF);
+    char *end = strchr(nl + 1, '\n');
+    if (end) *end = 0;
+    ck_assert_int_eq(split(nl + 1, row, MAXF), nh);
+    for (int i = 0; i < nh; i++)
+        if (strcmp(hdr[i], "dc") == 0) ck_assert_str_eq(cell(t, 0, "dc"), row[i]);
+    free(t);
+}
+END_TEST
+
 START_TEST(test_resume)
 {
     const char *dir = subdir("resume");
@@ -573,6 +610,7 @@ Suite *batch_suite(void)
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, test_rows_and_errors);
     tcase_add_test(tc, test_parallel_same_rows);
+    tcase_add_test(tc, test_method_passed_on);
     tcase_add_test(tc, test_resume);
     tcase_add_test(tc, test_failed_run);
     tcase_add_test(tc, test_usage);
