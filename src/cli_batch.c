@@ -700,6 +700,8 @@ int drape_cli_batch(int argc, char **argv)
      * with the first one that loads; a fabric's own errors belong in its
      * row) */
     drape_scene s;
+    /* strict: the scene's own fabric must exist too (a scene file with a
+     * dangling fabric is bad input for check, run and batch alike, issue 7) */
     if (drape_scene_load(b.scene, &s, &err, NULL, NULL) != 0) goto fail;
     for (int i = optind + 1; i < argc; i++) {
         drape_fabric fab;

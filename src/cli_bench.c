@@ -1090,7 +1090,8 @@ int drape_cli_bench(int argc, char **argv)
     b.ref_dc = NAN;
     int status = 0;
 
-    if (drape_scene_load(scene_path, &b.s, &err, drape_cli_warn, NULL) != 0) goto fail;
+    if (drape_scene_load_flags(scene_path, fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u, &b.s,
+                               &err, drape_cli_warn, NULL) != 0) goto fail;
     if (fabric_path) snprintf(b.s.fabric_path, sizeof b.s.fabric_path, "%s", fabric_path);
     if (spacing > 0) b.s.spacing = spacing;
     if (drape_fabric_load(b.s.fabric_path, &b.f, &err, drape_cli_warn, NULL) != 0) goto fail;

@@ -723,7 +723,8 @@ int drape_cli_run(int argc, char **argv)
         out_dir = resume_dir;
     }
 
-    if (drape_scene_load(scene_path, &s, &err, resume_dir ? NULL : drape_cli_warn, NULL) != 0)
+    if (drape_scene_load_flags(scene_path, fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u, &s,
+                               &err, resume_dir ? NULL : drape_cli_warn, NULL) != 0)
         goto fail;
     if (fabric_path) snprintf(s.fabric_path, sizeof s.fabric_path, "%s", fabric_path);
     if (integrator) snprintf(s.integrator, sizeof s.integrator, "%s", integrator);

@@ -89,6 +89,7 @@ const char *drape_energy_form_name(drape_energy_form f)
 typedef struct scene_ctx {
     const drape_ydoc *doc;
     drape_error *err;
+    unsigned flags; /* DRAPE_SCENE_LOAD_* */
 } scene_ctx;
 
 static const char *node_kind(const drape_ynode *n)
@@ -409,6 +410,9 @@ static int parse_fabric(const scene_ctx *c, const drape_ynode *root,
                                  "fabric path too long (more than %d bytes)",
                                  DRAPE_ERROR_FILE_MAX - 1);
     struct stat st;
+    /* the caller names another fabric (--fabric): the scene's own need not
+     * exist */
+    if (c->flags & DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN) return 0;
     if (stat(s->fabric_path, &st) != 0) {
         int e = errno;
         if (e == ENOENT || e == ENOTDIR)
@@ -1050,6 +1054,12 @@ static int parse_scene(const scene_ctx *c, drape_scene *s)
 int drape_scene_load(const char *path, drape_scene *s, drape_error *err,
                      drape_warn_fn warn, void *warn_ctx)
 {
+    return drape_scene_load_flags(path, 0u, s, err, warn, warn_ctx);
+}
+
+int drape_scene_load_flags(const char *path, unsigned flags, drape_scene *s,
+                           drape_error *err, drape_warn_fn warn, void *warn_ctx)
+{
     drape_ydoc *doc = NULL;
     int rc = -1;
     (void)warn;
@@ -1066,7 +1076,7 @@ int drape_scene_load(const char *path, drape_scene *s, drape_error *err,
     snprintf(s->path, sizeof s->path, "%s", path);
     doc = drape_ydoc_load(path, err);
     if (!doc) goto out;
-    scene_ctx c = {doc, err};
+    scene_ctx c = {doc, err, flags};
     if (parse_scene(&c, s) != 0) goto out;
     if (check_geometry(s, err) != 0) goto out;
     rc = 0;

@@ -396,6 +396,30 @@ START_TEST(test_fabric_relative)
 }
 END_TEST
 
+/* A scene whose own fabric file is missing: an error naming the key when
+ * the scene's fabric is to be used, fine when the caller overrides it
+ * (drape run --fabric, drape batch). */
+START_TEST(test_fabric_overridden)
+{
+    drape_scene s;
+    drape_error e;
+    char buf[1024];
+    const char *p = tu_write_file("nofab.yaml",
+                                  "scene: cusick\nfabric: no-such-fabric.yaml\n"
+                                  "spacing: 2 cm\nend: {t_max: 5 s}\n");
+    drape_error_clear(&e);
+    ck_assert_int_eq(drape_scene_load(p, &s, &e, NULL, NULL), -1);
+    ck_assert_int_eq(e.kind, DRAPE_E_IO);
+    ck_assert_str_eq(e.key, "fabric");
+    ck_assert_int_eq(e.line, 2);
+    drape_error_clear(&e);
+    int rc = drape_scene_load_flags(p, DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN, &s, &e, NULL, NULL);
+    ck_assert_msg(rc == 0, "%s", drape_error_format(&e, buf, sizeof buf));
+    ck_assert_int_eq(s.kind, DRAPE_SCENE_CUSICK);
+    ck_assert(strstr(s.fabric_path, "no-such-fabric.yaml") != NULL);
+}
+END_TEST
+
 /* ------------------------------------------------------------ bad input */
 
 START_TEST(test_bad_fabric_missing)
@@ -1011,6 +1035,7 @@ Suite *scene_suite(void)
     tcase_add_test(tc, test_options);
     tcase_add_test(tc, test_strain_limit);
     tcase_add_test(tc, test_fabric_relative);
+    tcase_add_test(tc, test_fabric_overridden);
     tcase_add_test(tc, test_alloc_failures);
     suite_add_tcase(s, tc);
 

@@ -114,6 +114,17 @@ extern const char *const drape_integrator_names[];
 int drape_scene_load(const char *path, drape_scene *s, drape_error *err,
                      drape_warn_fn warn, void *warn_ctx);
 
+/* Flags of drape_scene_load_flags. */
+enum {
+    /* the caller will use another fabric (--fabric): the scene's `fabric`
+     * key is still required and resolved into fabric_path, but the file
+     * need not exist */
+    DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN = 1u << 0
+};
+/* drape_scene_load with flags (0 = drape_scene_load). */
+int drape_scene_load_flags(const char *path, unsigned flags, drape_scene *s,
+                           drape_error *err, drape_warn_fn warn, void *warn_ctx);
+
 /* Checks that need both files: support or table larger than the specimen,
  * overhang longer than the strip, pins outside the lattice, a lattice that
  * would not fit in memory (estimated before allocating).  Errors name the
