@@ -1,6 +1,9 @@
 /* elastica.c: reference solutions for check_validation.c (test-only code,
  * not part of the drape library): the heavy cantilever elastica by
- * shooting, and the elastic catenary in closed form.
+ * shooting, the elastic catenary in closed form, the hanging chain's
+ * frequencies (continuum: Bernoulli's J0 modes; lumped: Sturm bisection),
+ * and a least-squares fit of sums of sinusoids for reading frequencies off
+ * a simulated time series.
  *
  * ---- Heavy cantilever ----
  *
@@ -54,12 +57,34 @@
  * z(l0 / 2), support tension T(0).  As k -> infinity this is the common
  * catenary l0 = 2 a sinh(l / (2 a)), sag = a (cosh(l / (2 a)) - 1),
  * a = H / w.
+ *
+ * ---- Hanging chain (D. Bernoulli, 1732)
+ * Small lateral motion u(y, t) of a flexible chain of weight w per unit
+ * length and mass w / g, y measured up from the free end, tension w y:
+ *   (w / g) u_tt = (w y u_y)_y;  u = f(y) cos(omega t) with
+ *   f = J0(2 omega sqrt(y / g)) (bounded at y = 0), and the fixed top
+ *   f(L) = 0 gives omega_n = (z_n / 2) sqrt(g / L), J0(z_n) = 0.
+ * The lumped chain of elastica.h is solved exactly (to rounding) as the
+ * eigenvalues of M^-1/2 K M^-1/2, a symmetric tridiagonal matrix, by Sturm
+ * sequence bisection.
+ *
+ * ---- Sums of sinusoids
+ * Variable projection (Golub & Pereyra 1973): the amplitudes enter
+ * linearly and are eliminated by an exact linear least-squares solve (the
+ * 2m x 2m normal equations by Cholesky), leaving m frequencies for
+ * Nelder-Mead (GSL nmsimplex2).  A sampled pure cosine at omega is matched
+ * exactly, so the fitted frequency carries no window or bin error; the
+ * periodogram only supplies starting points.
  */
 #include "elastica.h"
 
 #include <math.h>
 
+#include "drape/alloc.h"
+
 #include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
+#include <gsl/gsl_multimin.h>
 #include <gsl/gsl_odeiv2.h>
 #include <gsl/gsl_roots.h>
 
@@ -287,4 +312,224 @@ void catenary_point(const catenary_solution *c, double s, double *x,
     *x = h * s / c->k + h / w * (asinh(v / h) - asinh(r));
     *drop = (v * s - 0.5 * w * s * s) / c->k +
             h / w * (sqrt(1.0 + (v / h) * (v / h)) - sqrt(1.0 + r * r));
+}
+
+/* ---- hanging chain ---- */
+
+static const double j0_zeros[5] = {2.404825557695773, 5.520078110286311,
+                                   8.653727912911013, 11.791534439014281,
+                                   14.930917708487787};
+
+double chain_j0_zero(int n)
+{
+    return n >= 1 && n <= 5 ? j0_zeros[n - 1] : NAN;
+}
+
+double chain_omega_continuous(int n, double g, double length)
+{
+    return 0.5 * chain_j0_zero(n) * sqrt(g / length);
+}
+
+/* Number of eigenvalues below x of the symmetric tridiagonal matrix with
+ * diagonal d (n) and off-diagonal e (n - 1): the negative pivots of the
+ * LDL^T factorisation of A - x I (Sturm). */
+static int sturm_count(const double *d, const double *e, int n, double x)
+{
+    int c = 0;
+    double q = 1.0;
+    for (int i = 0; i < n; i++) {
+        q = d[i] - x - (i > 0 ? e[i - 1] * e[i - 1] / q : 0.0);
+        if (q == 0.0) q = -1e-300;
+        if (q < 0.0) c++;
+    }
+    return c;
+}
+
+int chain_discrete(int nseg, double length, double W, double g, double k,
+                   int nmodes, double *omega, double *seg_len)
+{
+    if (nseg < 2 || nmodes < 1 || nmodes > nseg || !(length > 0.0) || !(W > 0.0) ||
+        !(g > 0.0))
+        return -1;
+    const double sig = length / nseg;
+    double *d = drape_malloc(sizeof(double) * (size_t)nseg);
+    double *e = drape_malloc(sizeof(double) * (size_t)nseg);
+    double *m = drape_malloc(sizeof(double) * (size_t)nseg);
+    double *s = drape_malloc(sizeof(double) * (size_t)(nseg + 1));
+    if (!d || !e || !m || !s) {
+        drape_free(d); drape_free(e); drape_free(m); drape_free(s);
+        return -1;
+    }
+    /* unknowns: particles 1 .. nseg (index p - 1); segment j joins
+     * particles j and j + 1 */
+    for (int p = 1; p <= nseg; p++) m[p - 1] = p == nseg ? 0.5 * W * sig : W * sig;
+    for (int j = 0; j < nseg; j++) {
+        double T = g * W * sig * (nseg - j - 0.5);
+        double l = k > 0.0 ? sig * (1.0 + T / k) : sig;
+        if (seg_len) seg_len[j] = l;
+        s[j] = T / l;
+    }
+    s[nseg] = 0.0;
+    double hi = 0.0;
+    for (int p = 1; p <= nseg; p++) {
+        d[p - 1] = (s[p - 1] + s[p]) / m[p - 1];
+        if (p < nseg) e[p - 1] = -s[p] / sqrt(m[p - 1] * m[p]);
+    }
+    for (int i = 0; i < nseg; i++) { /* Gershgorin */
+        double r = d[i] + (i > 0 ? fabs(e[i - 1]) : 0.0) + (i < nseg - 1 ? fabs(e[i]) : 0.0);
+        if (r > hi) hi = r;
+    }
+    for (int q = 0; q < nmodes; q++) {
+        double lo = 0.0, up = hi;
+        for (int it = 0; it < 200 && up - lo > 1e-15 * up; it++) {
+            double mid = 0.5 * (lo + up);
+            if (sturm_count(d, e, nseg, mid) > q) up = mid;
+            else lo = mid;
+        }
+        omega[q] = sqrt(0.5 * (lo + up));
+    }
+    drape_free(d); drape_free(e); drape_free(m); drape_free(s);
+    return 0;
+}
+
+/* ---- frequencies of a sampled signal ---- */
+
+int sines_peaks(const double *t, const double *u, int nt, double omega_max,
+                double domega, int m, double *omega)
+{
+    if (nt < 3 || !(domega > 0.0) || !(omega_max > domega) || m < 1) return 0;
+    int ng = (int)(omega_max / domega);
+    double *p = drape_malloc(sizeof(double) * (size_t)ng);
+    double *pk = drape_malloc(sizeof(double) * (size_t)m);
+    if (!p || !pk) {
+        drape_free(p); drape_free(pk);
+        return 0;
+    }
+    for (int j = 0; j < ng; j++) {
+        double w = (j + 1) * domega, re = 0.0, im = 0.0;
+        for (int k = 0; k < nt; k++) {
+            double h = 0.5 * (1.0 - cos(2.0 * M_PI * k / (nt - 1)));
+            re += h * u[k] * cos(w * t[k]);
+            im -= h * u[k] * sin(w * t[k]);
+        }
+        p[j] = re * re + im * im;
+    }
+    int found = 0;
+    for (int j = 1; j < ng - 1; j++) {
+        if (!(p[j] > p[j - 1] && p[j] >= p[j + 1])) continue;
+        /* insert into the top m by height */
+        int pos = found < m ? found : m;
+        while (pos > 0 && pk[pos - 1] < p[j]) pos--;
+        if (pos >= m) continue;
+        int last = found < m ? found : m - 1;
+        for (int q = last; q > pos; q--) {
+            pk[q] = pk[q - 1];
+            omega[q] = omega[q - 1];
+        }
+        pk[pos] = p[j];
+        omega[pos] = (j + 1) * domega;
+        if (found < m) found++;
+    }
+    for (int a = 1; a < found; a++) /* ascending frequency */
+        for (int b = a; b > 0 && omega[b] < omega[b - 1]; b--) {
+            double tmp = omega[b];
+            omega[b] = omega[b - 1];
+            omega[b - 1] = tmp;
+        }
+    drape_free(p);
+    drape_free(pk);
+    return found;
+}
+
+typedef struct sines_ctx {
+    const double *t, *u;
+    int nch, nt, m;
+    double *phi;   /* nt x 2m, row-major */
+    gsl_matrix *g; /* 2m x 2m */
+    gsl_vector *b, *a;
+} sines_ctx;
+
+/* Sum over channels of the squared residual of the linear least-squares
+ * fit of u_c on the basis cos(omega_j t), sin(omega_j t). */
+static double sines_resid(const gsl_vector *w, void *params)
+{
+    sines_ctx *c = params;
+    const int nb = 2 * c->m, nt = c->nt;
+    for (int k = 0; k < nt; k++)
+        for (int j = 0; j < c->m; j++) {
+            double a = gsl_vector_get(w, (size_t)j) * c->t[k];
+            c->phi[k * nb + 2 * j] = cos(a);
+            c->phi[k * nb + 2 * j + 1] = sin(a);
+        }
+    for (int p = 0; p < nb; p++)
+        for (int q = 0; q <= p; q++) {
+            double s = 0.0;
+            for (int k = 0; k < nt; k++) s += c->phi[k * nb + p] * c->phi[k * nb + q];
+            gsl_matrix_set(c->g, (size_t)p, (size_t)q, s);
+            gsl_matrix_set(c->g, (size_t)q, (size_t)p, s);
+        }
+    if (gsl_linalg_cholesky_decomp1(c->g) != GSL_SUCCESS) return 1e300;
+    double total = 0.0;
+    for (int ch = 0; ch < c->nch; ch++) {
+        const double *u = c->u + (size_t)ch * (size_t)nt;
+        for (int p = 0; p < nb; p++) {
+            double s = 0.0;
+            for (int k = 0; k < nt; k++) s += c->phi[k * nb + p] * u[k];
+            gsl_vector_set(c->b, (size_t)p, s);
+        }
+        gsl_linalg_cholesky_solve(c->g, c->b, c->a);
+        for (int k = 0; k < nt; k++) {
+            double r = u[k];
+            for (int p = 0; p < nb; p++) r -= c->phi[k * nb + p] * gsl_vector_get(c->a, (size_t)p);
+            total += r * r;
+        }
+    }
+    return total;
+}
+
+int sines_fit(const double *t, const double *u, int nch, int nt, int m,
+              const double *guess, double *omega, double *rel_resid)
+{
+    gsl_set_error_handler_off();
+    if (m < 1 || nch < 1 || nt <= 2 * m) return -1;
+    int rc = -1;
+    sines_ctx c = {t, u, nch, nt, m, NULL, NULL, NULL, NULL};
+    c.phi = drape_malloc(sizeof(double) * (size_t)nt * (size_t)(2 * m));
+    c.g = gsl_matrix_alloc((size_t)(2 * m), (size_t)(2 * m));
+    c.b = gsl_vector_alloc((size_t)(2 * m));
+    c.a = gsl_vector_alloc((size_t)(2 * m));
+    gsl_vector *w = gsl_vector_alloc((size_t)m), *step = gsl_vector_alloc((size_t)m);
+    gsl_multimin_fminimizer *mm = gsl_multimin_fminimizer_alloc(
+        gsl_multimin_fminimizer_nmsimplex2, (size_t)m);
+    if (!c.phi || !c.g || !c.b || !c.a || !w || !step || !mm) goto out;
+    double span = t[nt - 1] - t[0], wmax = 0.0;
+    for (int j = 0; j < m; j++) {
+        gsl_vector_set(w, (size_t)j, guess[j]);
+        gsl_vector_set(step, (size_t)j, 0.05 * 2.0 * M_PI / span);
+        if (guess[j] > wmax) wmax = guess[j];
+    }
+    gsl_multimin_function f = {sines_resid, (size_t)m, &c};
+    if (gsl_multimin_fminimizer_set(mm, &f, w, step) != GSL_SUCCESS) goto out;
+    int status = GSL_CONTINUE;
+    for (int it = 0; it < 20000 && status == GSL_CONTINUE; it++) {
+        if (gsl_multimin_fminimizer_iterate(mm) != GSL_SUCCESS) break;
+        status = gsl_multimin_test_size(gsl_multimin_fminimizer_size(mm), 1e-12 * wmax);
+    }
+    if (status != GSL_SUCCESS) goto out;
+    for (int j = 0; j < m; j++) omega[j] = gsl_vector_get(mm->x, (size_t)j);
+    if (rel_resid) {
+        double s2 = 0.0;
+        for (size_t q = 0; q < (size_t)nch * (size_t)nt; q++) s2 += u[q] * u[q];
+        *rel_resid = sqrt(sines_resid(mm->x, &c) / s2);
+    }
+    rc = 0;
+out:
+    if (mm) gsl_multimin_fminimizer_free(mm);
+    if (w) gsl_vector_free(w);
+    if (step) gsl_vector_free(step);
+    if (c.a) gsl_vector_free(c.a);
+    if (c.b) gsl_vector_free(c.b);
+    if (c.g) gsl_matrix_free(c.g);
+    drape_free(c.phi);
+    return rc;
 }

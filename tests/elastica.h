@@ -1,6 +1,7 @@
 /* elastica.h: reference solutions for the validation tests (test-only
- * code, independent of the drape library): the heavy cantilever elastica
- * and the elastic catenary.
+ * code, independent of the drape library's physics): the heavy cantilever
+ * elastica, the elastic catenary, the hanging chain's frequencies, and a
+ * least-squares fit of sums of sinusoids.
  *
  * An inextensible strip with linear bending M = B K (B per unit width,
  * N.m), weight w = W g per unit length and width, clamped horizontally at
@@ -63,5 +64,57 @@ int catenary_solve(double w, double k, double l0, double span,
  * *x along the span, *drop below the supports. */
 void catenary_point(const catenary_solution *c, double s, double *x,
                     double *drop);
+
+/* ---- hanging chain -----------------------------------------------------
+ * A perfectly flexible chain of length L hanging from one end under
+ * gravity g.  Small lateral oscillations of the continuum (tension
+ * T = w y, y measured up from the free end) obey u_tt = g (y u_y)_y, whose
+ * modes are u = J0(z_n sqrt(y / L)) cos(omega_n t) with
+ *     omega_n = (z_n / 2) sqrt(g / L),   J0(z_n) = 0.          (Bernoulli)
+ * The lumped chain (nseg segments of rest length sigma = L / nseg,
+ * masses W sigma per particle and half that at the free end, per unit
+ * width, top particle fixed, segments stretching as T = k eps) has its
+ * own frequencies: segment j (from the top, j = 0 .. nseg-1) carries the
+ * weight of the particles below it, T_j = g W sigma (nseg - j - 1/2), is
+ * l_j = sigma (1 + T_j / k) long in equilibrium, and resists a lateral
+ * offset of its ends with stiffness T_j / l_j; the lateral motion is then
+ * M u'' = -K u with K tridiagonal, decoupled from the axial motion to
+ * first order. */
+
+/* z_n, the n-th positive zero of the Bessel function J0 (n = 1 .. 5;
+ * Abramowitz & Stegun table 9.5, 15 digits); NaN outside. */
+double chain_j0_zero(int n);
+/* omega_n of the continuous chain, rad/s. */
+double chain_omega_continuous(int n, double g, double length);
+/* The nmodes lowest lateral frequencies (rad/s, ascending) of the lumped
+ * chain above, by Sturm bisection on the mass-scaled tridiagonal matrix
+ * (to 1e-14 relative); k <= 0 means inextensible.  seg_len (may be NULL)
+ * receives the nseg equilibrium segment lengths l_j, m.  Returns 0 or -1. */
+int chain_discrete(int nseg, double length, double W, double g, double k,
+                   int nmodes, double *omega, double *seg_len);
+
+/* ---- frequencies of a sampled signal ------------------------------------
+ * u holds nch channels of nt samples each, channel c at u[c * nt + k],
+ * taken at times t[k]. */
+
+/* The m highest local maxima of the Hann-windowed periodogram of channel
+ * u (nt samples), |sum_k h_k u_k exp(-i omega t_k)|^2, scanned on
+ * omega = domega, 2 domega, .. omega_max; returned in ascending order.
+ * Only starting values for sines_fit (resolution domega).  Returns the
+ * number of maxima found (<= m). */
+int sines_peaks(const double *t, const double *u, int nt, double omega_max,
+                double domega, int m, double *omega);
+
+/* Least-squares fit of a sum of m sinusoids with common frequencies to
+ * every channel,
+ *     u_c(t) ~ sum_j a_cj cos(omega_j t) + b_cj sin(omega_j t),
+ * by variable projection: for given omega the amplitudes are a linear
+ * least-squares problem (solved exactly); the frequencies minimise the
+ * remaining sum of squares (Nelder-Mead from `guess`, simplex size down to
+ * 1e-12 of the largest frequency).  rel_resid (may be NULL) receives
+ * sqrt(residual / sum u^2).  Returns 0, or -1 (no convergence, singular
+ * basis). */
+int sines_fit(const double *t, const double *u, int nch, int nt, int m,
+              const double *guess, double *omega, double *rel_resid);
 
 #endif /* DRAPE_TESTS_ELASTICA_H */
