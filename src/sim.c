@@ -178,12 +178,19 @@ static int diagnose_point(drape_model *m, const drape_sim_opts *o, const drape_i
                        &r->diagnosis) == 0)
         return 0;
     drape_diagnosis_format(&r->diagnosis, what, sizeof what);
-    const char *hint = "tighten rtol or use an implicit integrator";
+    const char *name = drape_integrator_name(I);
+    /* explicit methods: an implicit one is the cure; implicit ones at loose
+     * tolerance (gsl-msbdf at rtol 1e-2 in the hard-case suite): an
+     * L-stable one or a tighter rtol */
+    int expl = strcmp(name, "arkode-erk") == 0 || strcmp(name, "gsl-rk8pd") == 0;
+    const char *hint = expl ? "tighten rtol or use an implicit integrator (cvode-bdf, arkode-dirk)"
+                            : "tighten rtol, or use an L-stable integrator (arkode-dirk, or "
+                              "cvode-bdf at its default maximum order 2)";
     if (r->diagnosis.kind == DRAPE_DIAG_STRAIN)
         hint = "tighten rtol, or raise end.strain_limit (--strain-limit) if such a "
                "strain is physical";
     return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL, "%s: %s; hint: %s",
-                           drape_integrator_name(I), what, hint);
+                           name, what, hint);
 }
 
 static int notify(drape_sim_observer obs, void *ctx, unsigned what, double t,
