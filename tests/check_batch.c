@@ -432,25 +432,6 @@ END_TEST
  * exit status 6, and no frames directory of its run.  combo- files are
  * scenes whose own fabric is bad: a batch replaces the fabric, so they run
  * (not checked here). */
-static void bad_header(const char *path, int *line, char *key, size_t nkey)
-{
-    *line = 0;
-    key[0] = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    char buf[512];
-    if (fgets(buf, sizeof buf, f) && strncmp(buf, "# expect ", 9) == 0) {
-        char *p = buf + 9, *end;
-        *line = (int)strtol(p, &end, 10);
-        p = end + (*end == ' ');
-        char *colon = strchr(p, ':');
-        size_t n = colon ? (size_t)(colon - p) : 0;
-        if (n >= nkey) n = nkey - 1;
-        memcpy(key, p, n);
-        key[n] = 0;
-    }
-    fclose(f);
-}
 
 static void want_line_key(const char *name, const char *text, int line, const char *key)
 {
@@ -479,7 +460,7 @@ START_TEST(test_bad_corpus)
         char path[600], key[256], args[4096], dir[600];
         int line;
         snprintf(path, sizeof path, "bad/%s", e->d_name);
-        bad_header(path, &line, key, sizeof key);
+        tu_bad_header(path, &line, key, sizeof key);
         int fabric = strncmp(e->d_name, "fabric-", 7) == 0;
         int yaml = strncmp(e->d_name, "yaml-", 5) == 0;
         int scene = strncmp(e->d_name, "scene-", 6) == 0 || yaml;

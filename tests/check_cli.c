@@ -96,25 +96,6 @@ END_TEST
  * message "drape: FILE:LINE:COL: KEY: ...".  A file's first line may say
  * what is expected: "# expect LINE KEY: why" (KEY may be empty); then the
  * message must name that line and key. */
-static void expect_header(const char *path, int *line, char *key, size_t nkey)
-{
-    *line = 0;
-    key[0] = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    char buf[512];
-    if (fgets(buf, sizeof buf, f) && strncmp(buf, "# expect ", 9) == 0) {
-        char *p = buf + 9, *end;
-        *line = (int)strtol(p, &end, 10);
-        p = end + (*end == ' ');
-        char *colon = strchr(p, ':');
-        size_t n = colon ? (size_t)(colon - p) : 0;
-        if (n >= nkey) n = nkey - 1;
-        memcpy(key, p, n);
-        key[n] = 0;
-    }
-    fclose(f);
-}
 
 START_TEST(test_bad_corpus)
 {
@@ -128,7 +109,7 @@ START_TEST(test_bad_corpus)
         char args[1024], path[600], key[256], pat[300];
         int line;
         snprintf(path, sizeof path, "bad/%s", e->d_name);
-        expect_header(path, &line, key, sizeof key);
+        tu_bad_header(path, &line, key, sizeof key);
         snprintf(args, sizeof args, "check '%s'", path);
         int st = tu_run_drape(args, out, CAP, err, CAP);
         ck_assert_msg(st != 0 && st != 2 && st < 64,

@@ -513,25 +513,6 @@ END_TEST
  * both ways.  Non-zero documented status (1, 3 or 5), the line and key of
  * the file's "# expect LINE KEY:" header, nothing on stdout, and --out DIR
  * never created. */
-static void expect_header(const char *path, int *line, char *key, size_t nkey)
-{
-    *line = 0;
-    key[0] = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    char buf[512];
-    if (fgets(buf, sizeof buf, f) && strncmp(buf, "# expect ", 9) == 0) {
-        char *p = buf + 9, *end;
-        *line = (int)strtol(p, &end, 10);
-        p = end + (*end == ' ');
-        char *colon = strchr(p, ':');
-        size_t n = colon ? (size_t)(colon - p) : 0;
-        if (n >= nkey) n = nkey - 1;
-        memcpy(key, p, n);
-        key[n] = 0;
-    }
-    fclose(f);
-}
 
 static void expect_rejected(const char *name, const char *args, const char *dir, int line,
                             const char *key)
@@ -568,7 +549,7 @@ START_TEST(test_bad_corpus_run)
         char path[600], key[256], args[2048];
         int line;
         snprintf(path, sizeof path, "bad/%s", e->d_name);
-        expect_header(path, &line, key, sizeof key);
+        tu_bad_header(path, &line, key, sizeof key);
         int fabric = strncmp(e->d_name, "fabric-", 7) == 0;
         int yaml = strncmp(e->d_name, "yaml-", 5) == 0;
         if (!fabric) {

@@ -84,3 +84,23 @@ int tu_run_drape(const char *args, char *out, size_t outcap, char *err,
     if (st == -1 || !WIFEXITED(st)) return -1;
     return WEXITSTATUS(st);
 }
+
+void tu_bad_header(const char *path, int *line, char *key, size_t nkey)
+{
+    *line = 0;
+    key[0] = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) return;
+    char buf[512];
+    if (fgets(buf, sizeof buf, f) && strncmp(buf, "# expect ", 9) == 0) {
+        char *p = buf + 9, *end;
+        *line = (int)strtol(p, &end, 10);
+        p = end + (*end == ' ');
+        char *colon = strchr(p, ':');
+        size_t n = colon ? (size_t)(colon - p) : 0;
+        if (n >= nkey) n = nkey - 1;
+        memcpy(key, p, n);
+        key[n] = 0;
+    }
+    fclose(f);
+}

@@ -49,4 +49,8 @@ int tu_run_drape(const char *args, char *out, size_t outcap, char *err,
  * tu_src("scenes/cusick.yaml") -> "../scenes/cusick.yaml"). */
 const char *tu_src(const char *rel);
 
+/* The "# expect LINE KEY: why" first line of a tests/bad/ file: *line = 0
+ * and key = "" when the file has none (or cannot be read). */
+void tu_bad_header(const char *path, int *line, char *key, size_t nkey);
+
 #endif
