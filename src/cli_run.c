@@ -6,7 +6,8 @@
  *
  * Interruption and resume (issue 7; docs/reliability.md): SIGINT and
  * SIGTERM set a flag (the handler does nothing else) that the driver polls
- * at every output point; the run then ends there with status interrupted,
+ * at every output point and every right-hand side evaluation checks; the
+ * run then ends at the last output point with status interrupted,
  * writes DIR/drape.h5 with the state, velocities, time and run options
  * (group /run), and exits with 128 + the signal.  A second signal ends
  * drape at once (the handler is reset to the default on entry).
@@ -84,9 +85,10 @@ static const char run_usage[] =
     "  -q, --quiet              no progress on stderr\n"
     "  -h, --help               show this help\n"
     "\n"
-    "SIGINT or SIGTERM stops a dynamic run at the next output point (frame or\n"
-    "equilibrium check): status interrupted, the frames so far and DIR/drape.h5\n"
-    "are kept for --resume; a second signal ends drape at once.\n"
+    "SIGINT or SIGTERM stops a dynamic run within one model evaluation; it ends\n"
+    "at the last output point (frame or equilibrium check) with status\n"
+    "interrupted, the frames so far and DIR/drape.h5 kept for --resume; a second\n"
+    "signal ends drape at once.\n"
     "\n"
     "Exit status: 0 equilibrium or t_max, 1 invalid input, 2 bad command line,\n"
     "3 I/O error, 4 the run failed (numerical), 5 out of memory, 130 interrupted\n"

@@ -75,6 +75,7 @@ int drape_ode_rhs(drape_ode *o, unsigned parts, int include_kinematic,
                   const double *y, double *ydot)
 {
     const drape_lattice *L = o->lattice;
+    if (o->stop && *o->stop) return -1;
     o->n_rhs++;
     scatter(o, y);
     parts &= o->parts;
@@ -167,6 +168,7 @@ static int ode_init(drape_ode *o, drape_model *m, const drape_integrator_opts *o
                                "integrator: out of memory for %ld unknowns", (long)(3 * n3));
     }
     memcpy(o->x, L->xinit, sizeof(double) * n3);
+    o->stop = opt->stop;
     for (int k = 0; k < L->n_free; k++) o->inv_mass[k] = 1.0 / L->mass[L->free_to_id[k]];
     double T = opt->t_scale > 0.0 ? opt->t_scale : sqrt(rest_extent(L) / DRAPE_G_STANDARD);
     for (long i = 0; i < o->nf3; i++) {

@@ -55,7 +55,10 @@ static int gsl_rhs(double t, const double y[], double dydt[], void *p)
 {
     gsl_state *s = p;
     (void)t;
-    return drape_ode_rhs(s->ode, s->ode->parts, 1, y, dydt) ? GSL_FAILURE : GSL_SUCCESS;
+    int rc = drape_ode_rhs(s->ode, s->ode->parts, 1, y, dydt);
+    /* -1: the run is being stopped (opts.stop): GSL_EBADFUNC ends the
+     * step at once instead of retrying with a smaller one */
+    return rc < 0 ? GSL_EBADFUNC : rc ? GSL_FAILURE : GSL_SUCCESS;
 }
 
 static int gsl_jac(double t, const double y[], double *dfdy, double dfdt[], void *p)

@@ -247,6 +247,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     io.max_order = o->max_order;
     io.max_steps = o->max_steps;
     io.linsol = o->linsol;
+    io.stop = o->stop;
     w0 = now_s();
     I = drape_integrator_new(m, o->integrator, &io, err);
     if (I && resume && drape_integrator_reinit(I, o->t0, r->x, r->v, err) != 0) {
@@ -304,6 +305,16 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
         int src = drape_integrator_step_to(I, t_next, DRAPE_STEP_NORMAL, err);
         wall += now_s() - w0;
         drape_integrator_state(I, x, v);
+        if (src && o->stop && *o->stop) {
+            /* stopped inside the interval (the right-hand side refused to
+             * run): the run ends at the last output point, whose state
+             * r->x, r->v hold and whose checkpoint the observer has */
+            drape_error_clear(err);
+            memcpy(x, r->x, sizeof(double) * n3);
+            memcpy(v, r->v, sizeof(double) * n3);
+            r->status = DRAPE_SIM_INTERRUPTED;
+            break;
+        }
         if (src) {
             t = drape_integrator_time(I);
             if (all_finite(x, n3) && all_finite(v, n3)) {

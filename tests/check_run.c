@@ -360,6 +360,36 @@ static void h5_status(const char *path, char *buf, size_t n)
  * only the step sizes: the runs differ by less than their own global
  * errors, see below; a resume from a wrong time or without the
  * velocities is off by centimetres). */
+/* A signal stops the run within the output interval, not at its end: one
+ * interval of 50 s of cloth motion (hours of stepping); SIGTERM once the
+ * t = 0 frame exists must end the run with status interrupted at t = 0,
+ * the last output point.  Without the check in the right-hand side the run
+ * would go on to t = 50 s (and this test would time out). */
+START_TEST(test_interrupt_within_interval)
+{
+    char cwd[512], text[2048], dir[600], wait_for[700];
+    ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
+    snprintf(text, sizeof text,
+             "scene: hang\n"
+             "fabric: %s/../fabrics/cotton-breen.yaml\n"
+             "specimen: {shape: rectangle, width: 20 cm, height: 20 cm}\n"
+             "spacing: 2 cm\n"
+             "pins: [[0, -1], [-1, -1]]\n"
+             "solver: {integrator: cvode-bdf, rtol: 1e-8, atol: 1e-11}\n"
+             "end: {t_max: 100 s}\n"
+             "output: {frames: {every: 50 s, obj: true}, hdf5: true}\n",
+             cwd);
+    const char *scene = tu_write_file("long-interval.yaml", text);
+    snprintf(dir, sizeof dir, "%s/long-interval", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/frame_000000.obj", dir);
+    const char *a[] = {"run", "-q", scene, "--out", dir, NULL};
+    int code = run_and_signal(wait_for, SIGTERM, a);
+    ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
+    ck_assert_double_eq(json_num(out, "t_end_s"), 0.0);
+}
+END_TEST
+
 START_TEST(test_interrupt_and_resume)
 {
     const char *scene = ir_scene();
@@ -579,6 +609,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_output_dir_errors);
     tcase_add_test(tc, test_cusick_static_equilibrium);
     tcase_add_test(tc, test_cusick_dynamic_equilibrium);
+    tcase_add_test(tc, test_interrupt_within_interval);
     tcase_add_test(tc, test_interrupt_and_resume);
     tcase_add_test(tc, test_resume_refusals);
     tcase_add_test(tc, test_strain_limit_stops_run);

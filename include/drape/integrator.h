@@ -38,6 +38,7 @@
 #ifndef DRAPE_INTEGRATOR_H
 #define DRAPE_INTEGRATOR_H
 
+#include <signal.h>
 #include <stddef.h>
 
 #include "drape/error.h"
@@ -60,6 +61,10 @@ typedef struct drape_integrator_opts {
     double h_init;      /* first step, s; 0 = solver's own choice (GSL: default above) */
     int linsol;         /* drape_linsol: Newton linear solver of the SUNDIALS
                            implicit backends; 0 = DRAPE_LINSOL_AUTO */
+    const volatile sig_atomic_t *stop; /* when *stop != 0 every right-hand
+                           side fails at once (unrecoverably), so step_to
+                           returns within one evaluation (SIGINT/SIGTERM,
+                           issue 7); NULL = never */
 } drape_integrator_opts;
 
 /* Linear solver of the Newton systems (I - gamma J) dy = r of cvode-bdf,
@@ -122,10 +127,12 @@ typedef struct drape_ode {
     double *inv_mass;              /* n_free: 1 / m */
     double *x, *v, *f;             /* full 3n scratch (fixed: xinit, 0) */
     long n_rhs, n_jac;             /* evaluation counters */
+    const volatile sig_atomic_t *stop; /* drape_integrator_opts.stop */
 } drape_ode;
 
 /* ydot = [ include_kinematic ? v : 0 ; M^-1 f_parts(x, v) ] at y.  Returns
- * 0, or 1 (recoverable: the model folded, or a non-finite value). */
+ * 0, 1 (recoverable: the model folded, or a non-finite value), or -1 when
+ * o->stop is raised (the backends pass it on as an unrecoverable failure). */
 int drape_ode_rhs(drape_ode *o, unsigned parts, int include_kinematic,
                   const double *y, double *ydot);
 /* J (nnz of o->pattern) = Jacobian of that right-hand side.  Returns 0/1. */

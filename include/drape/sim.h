@@ -22,8 +22,11 @@
  * above strain_limit, energy blow-up) before any observer sees it; a fault
  * ends the run with status failed and an E_NUMERIC error naming the time,
  * the particle(s) and the term.  When opts.stop is given it is polled at
- * every output point, after the observer: non-zero ends the run there with
- * status interrupted (drape_sim_run returns 0; no DRAPE_SIM_AT_END call).
+ * every output point, after the observer, and by every right-hand side
+ * evaluation (so a run stops within one evaluation, not one output
+ * interval): non-zero ends the run with status interrupted at the last
+ * output point, whose state and checkpoint are kept (drape_sim_run returns
+ * 0; no DRAPE_SIM_AT_END call).
  *
  * Resuming.  With x0 (and v0, t0) the run starts at t0 from that state
  * instead of t = 0 from the lattice's initial state: no DRAPE_SIM_AT_START
@@ -70,7 +73,8 @@ typedef struct drape_sim_opts {
     long max_steps;      /* per output interval; 0 = default */
     int observe_progress; /* 1: also call the observer at every other output point */
     /* added (issue 7) */
-    const volatile sig_atomic_t *stop; /* polled at output points; NULL = never */
+    const volatile sig_atomic_t *stop; /* polled at output points and in every
+                                          right-hand side; NULL = never */
     double strain_limit; /* stop (failed) above this strain; 0 = no limit */
     double energy_gain;  /* stop (failed) when E rises by this x scale (diagnose.h); 0 = off */
     double t0;           /* resume: start time, s (0 = a fresh run) */
