@@ -661,19 +661,6 @@ static void progress(const bench *b, const bench_point *p)
     fputc('\n', stderr);
 }
 
-static int ensure_dir(const char *dir, drape_error *err)
-{
-    struct stat st;
-    if (stat(dir, &st) == 0) {
-        if (S_ISDIR(st.st_mode)) return 0;
-        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: not a directory");
-    }
-    if (mkdir(dir, 0777) != 0)
-        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
-                               "--out: cannot create directory: %s", strerror(errno));
-    return 0;
-}
-
 /* File name stem: --name, or the scene file's base name without .yaml/.yml. */
 static void csv_path(bench *b, const char *name, const char *fallback)
 {
@@ -907,7 +894,7 @@ static int run_kernels(const drape_scene *s, const drape_fabric *f, const int *s
     FILE *o = stdout;
     char path[4096];
     if (out_dir) {
-        if (ensure_dir(out_dir, err) != 0) return -1;
+        if (drape_cli_ensure_dir(out_dir, NULL, err) != 0) return -1;
         snprintf(path, sizeof path, "%s/%s.csv", out_dir, name ? name : "kernels");
         if (drape_cli_afile_open(&a, path, err) != 0) return -1;
         o = a.f;
@@ -1146,7 +1133,7 @@ int drape_cli_bench(int argc, char **argv)
     }
     b.out_dir = out_dir;
     if (out_dir) {
-        if (ensure_dir(out_dir, &err) != 0) goto fail;
+        if (drape_cli_ensure_dir(out_dir, NULL, &err) != 0) goto fail;
         csv_path(&b, name, scene_path);
     } else {
         write_header(stdout, bench_columns);

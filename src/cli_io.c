@@ -267,3 +267,18 @@ void drape_cli_csv_put(FILE *out, const char *s)
     }
     fputc('"', out);
 }
+
+int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err)
+{
+    struct stat st;
+    if (created) *created = 0;
+    if (stat(dir, &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return 0;
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: not a directory");
+    }
+    if (mkdir(dir, 0777) != 0)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "--out: cannot create directory: %s", strerror(errno));
+    if (created) *created = 1;
+    return 0;
+}

@@ -9,6 +9,11 @@
 
 #include "drape/error.h"
 
+/* Make directory DIR (one level) if it does not exist; an existing
+ * non-directory is an E_IO error naming DIR and `--out`.  created may be
+ * NULL; otherwise *created = 1 when this call made DIR. */
+int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
+
 /* Read a whole file of at most max bytes into a NUL-terminated buffer
  * (*len = its length, may be NULL).  Caller frees with drape_free.  NULL
  * and err on failure. */

@@ -277,22 +277,6 @@ static int parse_quantity(const char *opt, const char *text, drape_dim dim,
     return 0;
 }
 
-/* Make DIR if needed; *created = 1 when this call made it. */
-static int ensure_dir(const char *dir, int *created, drape_error *err)
-{
-    struct stat st;
-    *created = 0;
-    if (stat(dir, &st) == 0) {
-        if (S_ISDIR(st.st_mode)) return 0;
-        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: not a directory");
-    }
-    if (mkdir(dir, 0777) != 0)
-        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
-                               "--out: cannot create directory: %s", strerror(errno));
-    *created = 1;
-    return 0;
-}
-
 /* ---- interruption ------------------------------------------------------------ */
 
 /* The signal that asked the run to stop, 0 = none.  The handler only sets
@@ -754,7 +738,7 @@ int drape_cli_run(int argc, char **argv)
     if (!m) goto fail;
 
     if (out_dir) {
-        if (ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
+        if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
         if (s.has_frames && s.out_obj) {
             rc.obj = drape_obj_new(out_dir, L, f.name, drape_scene_kind_name(s.kind), &err);
             if (!rc.obj) goto fail;

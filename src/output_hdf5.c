@@ -144,6 +144,22 @@ out:
     return rc;
 }
 
+/* Group NAME under loc with one attribute per key (text or number); keys
+ * that are NULL or empty are skipped.  0 or -1. */
+static int put_kv_group(hid_t loc, const char *name, const drape_kv *kv, int n)
+{
+    hid_t g = H5Gcreate2(loc, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0) return -1;
+    int rc = 0;
+    for (int k = 0; k < n && rc == 0; k++) {
+        if (!kv[k].key || !kv[k].key[0]) continue;
+        rc = kv[k].text ? attr_string(g, kv[k].key, kv[k].text)
+                        : attr_double(g, kv[k].key, kv[k].value);
+    }
+    H5Gclose(g);
+    return rc < 0 ? -1 : 0;
+}
+
 static int attr_units(hid_t loc, const char *units)
 {
     return attr_string(loc, "units", units);
@@ -413,32 +429,11 @@ static int write_final(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
         H5Gclose(g);
         g = -1;
     }
-    if (fin->n_stats > 0 && fin->stats) {
-        g = H5Gcreate2(h->file, "stats", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-        if (g < 0) goto h5err;
-        for (int k = 0; k < fin->n_stats; k++) {
-            const drape_kv *kv = fin->stats + k;
-            if (!kv->key || !kv->key[0]) continue;
-            if (kv->text ? attr_string(g, kv->key, kv->text) < 0
-                         : attr_double(g, kv->key, kv->value) < 0)
-                goto h5err;
-        }
-        H5Gclose(g);
-        g = -1;
-    }
-    if (fin->n_run > 0 && fin->run) {
-        g = H5Gcreate2(h->file, "run", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-        if (g < 0) goto h5err;
-        for (int k = 0; k < fin->n_run; k++) {
-            const drape_kv *kv = fin->run + k;
-            if (!kv->key || !kv->key[0]) continue;
-            if (kv->text ? attr_string(g, kv->key, kv->text) < 0
-                         : attr_double(g, kv->key, kv->value) < 0)
-                goto h5err;
-        }
-        H5Gclose(g);
-        g = -1;
-    }
+    if (fin->n_stats > 0 && fin->stats &&
+        put_kv_group(h->file, "stats", fin->stats, fin->n_stats) < 0)
+        goto h5err;
+    if (fin->n_run > 0 && fin->run && put_kv_group(h->file, "run", fin->run, fin->n_run) < 0)
+        goto h5err;
     if ((fin->fabric_yaml && attr_string(h->file, "fabric_yaml", fin->fabric_yaml) < 0) ||
         (fin->scene_yaml && attr_string(h->file, "scene_yaml", fin->scene_yaml) < 0))
         goto h5err;
