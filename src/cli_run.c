@@ -464,6 +464,7 @@ static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
     const drape_lattice *L = drape_model_lattice(m);
     drape_equilibrium_opts eo;
     drape_equilibrium_opts_from_fabric(&eo, f);
+    eo.stop = &stop_signal;
     snprintf(res->integrator, sizeof res->integrator, "static");
     res->status = DRAPE_SIM_FAILED;
     res->t_end_s = NAN;
@@ -485,6 +486,7 @@ static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
     res->kinetic_J = 0.0;
     res->max_strain = er->max_strain;
     res->max_speed = 0.0;
+    if (er->status == DRAPE_EQ_INTERRUPTED) return 1; /* the caller reports it */
     if (er->status != DRAPE_EQ_CONVERGED) {
         drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                         "static equilibrium not reached (%s after %d iterations, largest "
@@ -756,7 +758,7 @@ int drape_cli_run(int argc, char **argv)
 
     if (method_static) {
         sim_ok = run_static(m, &f, &rc, &res, &er, &err);
-        if (stop_signal) { /* the solve cannot be cut short: acted upon after it */
+        if (stop_signal) { /* the solve stops at its next iteration */
             interrupted = 1;
             res.status = DRAPE_SIM_INTERRUPTED;
             drape_obj_discard(rc.obj);
@@ -930,7 +932,7 @@ int drape_cli_run(int argc, char **argv)
         int sig = stop_signal;
         if (rc.progress) fputc('\n', stderr); /* end the progress line */
         if (method_static)
-            fprintf(stderr, "drape: run interrupted by %s after the static solve; nothing "
+            fprintf(stderr, "drape: run interrupted by %s during the static solve; nothing "
                     "written\n", signal_name(sig));
         else if (out_dir)
             fprintf(stderr, "drape: run interrupted by %s at t = %.9g s; continue with "

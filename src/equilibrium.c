@@ -120,6 +120,7 @@ void drape_equilibrium_opts_default(drape_equilibrium_opts *o)
     o->force_ref = 0.0;
     o->trace = NULL;
     o->trace_ctx = NULL;
+    o->stop = NULL;
 }
 
 void drape_equilibrium_opts_from_fabric(drape_equilibrium_opts *o, const drape_fabric *f)
@@ -135,6 +136,7 @@ const char *drape_equilibrium_status_name(drape_equilibrium_status s)
     case DRAPE_EQ_CONVERGED: return "converged";
     case DRAPE_EQ_MAX_ITERS: return "max_iters";
     case DRAPE_EQ_STALLED: return "stalled";
+    case DRAPE_EQ_INTERRUPTED: return "interrupted";
     }
     return "stalled";
 }
@@ -550,7 +552,7 @@ static void work_free(eq_work *w)
  * K, D at (x0, v_n).  Runs for time T (it follows the physical fall, with
  * inertia, into the basin that the dynamic run would reach). */
 static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps,
-                           drape_error *err)
+                           const volatile sig_atomic_t *stop, drape_error *err)
 {
     unsigned parts_all = drape_model_parts(w->m);
     const drape_lattice *L = w->L;
@@ -562,6 +564,7 @@ static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps
     int have_prev = 0;
     *steps = 0;
     while (t < T * (1.0 - 1e-12)) {
+        if (stop && *stop) return 2;
         double hs = h < T - t ? h : T - t;
         int bdf2 = have_prev;
         double b = bdf2 ? 2.0 / 3.0 : 1.0, bh = b * hs;
@@ -739,8 +742,19 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
     }
 
     if (o.dyn_time > 0.0) {
-        int rcd = damped_dynamics(&w, x, o.dyn_time, o.dyn_dt, &r->dyn_steps, err);
+        int rcd = damped_dynamics(&w, x, o.dyn_time, o.dyn_dt, &r->dyn_steps, o.stop, err);
         if (rcd < 0) goto out;
+        if (rcd == 2) {
+            r->status = DRAPE_EQ_INTERRUPTED;
+            if (eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
+                drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                                "equilibrium: the damped dynamics failed (folded hinge or "
+                                "corner, or zero-length edge)");
+                goto out;
+            }
+            rc = 0;
+            goto done;
+        }
         if (rcd != 0 || eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
             drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                             "equilibrium: the damped dynamics failed (folded hinge or "
@@ -764,6 +778,10 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
     while (1) {
         if (frel <= o.tol) {
             r->status = DRAPE_EQ_CONVERGED;
+            break;
+        }
+        if (o.stop && *o.stop) {
+            r->status = DRAPE_EQ_INTERRUPTED;
             break;
         }
         if (r->iterations >= o.max_iters) break;
@@ -867,7 +885,7 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
     x = iterate_home(&w, x);
 
     /* certification (E6): the exact Hessian at x */
-    if (o.certify) {
+    if (o.certify && r->status != DRAPE_EQ_INTERRUPTED) {
         r->jacobian_evals++;
         if (drape_model_jacobian(m, w.parts, x, NULL, w.K, NULL) != 0) {
             r->certified = 0;

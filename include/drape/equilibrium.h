@@ -27,6 +27,8 @@
 #ifndef DRAPE_EQUILIBRIUM_H
 #define DRAPE_EQUILIBRIUM_H
 
+#include <signal.h>
+
 #include "drape/error.h"
 #include "drape/fabric.h"
 #include "drape/model.h"
@@ -72,6 +74,11 @@ typedef struct drape_equilibrium_opts {
     double force_ref;    /* N; 0 = m_i g (the model then needs gravity) */
     drape_equilibrium_trace_fn trace; /* NULL = no tracing */
     void *trace_ctx;
+    const volatile sig_atomic_t *stop; /* checked before every step of the
+                            damped dynamics and every iteration: when it is
+                            non-zero the call ends with status interrupted
+                            (x the last accepted iterate, not certified);
+                            NULL = never */
 } drape_equilibrium_opts;
 
 /* Defaults (the values quoted above), no clamping, no dynamics, no trace. */
@@ -82,12 +89,14 @@ void drape_equilibrium_opts_from_fabric(drape_equilibrium_opts *o, const drape_f
 typedef enum drape_equilibrium_status {
     DRAPE_EQ_CONVERGED, /* every |F_i| <= tol w_i */
     DRAPE_EQ_MAX_ITERS, /* max_iters used up */
-    DRAPE_EQ_STALLED    /* no step lowers E_pot any more: the roundoff floor
+    DRAPE_EQ_STALLED,   /* no step lowers E_pot any more: the roundoff floor
                            lies above tol, or dt collapsed; x is the last
                            accepted iterate */
+    DRAPE_EQ_INTERRUPTED /* opts.stop was raised; x is the last accepted
+                           iterate, not certified */
 } drape_equilibrium_status;
 
-/* "converged", "max_iters", "stalled". */
+/* "converged", "max_iters", "stalled", "interrupted". */
 const char *drape_equilibrium_status_name(drape_equilibrium_status s);
 
 typedef struct drape_equilibrium_result {
