@@ -550,7 +550,8 @@ static void work_free(eq_work *w)
  * one Newton iteration from v = v_n (x0 = xh + b h v_n):
  *     (M - b h D - (b h)^2 K) dv = M (vh - v_n) + b h f(x0, v_n),
  * K, D at (x0, v_n).  Runs for time T (it follows the physical fall, with
- * inertia, into the basin that the dynamic run would reach). */
+ * inertia, into the basin that the dynamic run would reach).  Returns 0, 1
+ * (folded or too small a step), 2 (stop raised) or -1 (err set). */
 static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps,
                            const volatile sig_atomic_t *stop, drape_error *err)
 {
@@ -744,22 +745,16 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
     if (o.dyn_time > 0.0) {
         int rcd = damped_dynamics(&w, x, o.dyn_time, o.dyn_dt, &r->dyn_steps, o.stop, err);
         if (rcd < 0) goto out;
-        if (rcd == 2) {
-            r->status = DRAPE_EQ_INTERRUPTED;
-            if (eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
-                drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
-                                "equilibrium: the damped dynamics failed (folded hinge or "
-                                "corner, or zero-length edge)");
-                goto out;
-            }
-            rc = 0;
-            goto done;
-        }
-        if (rcd != 0 || eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
+        if (rcd == 1 || eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
             drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                             "equilibrium: the damped dynamics failed (folded hinge or "
                             "corner, or zero-length edge)");
             goto out;
+        }
+        if (rcd == 2) { /* stopped: report the state reached, not certified */
+            r->status = DRAPE_EQ_INTERRUPTED;
+            rc = 0;
+            goto done;
         }
     }
     /* time scale T = sqrt(sigma / g) (sqrt(sigma m / w) with force_ref) */

@@ -599,6 +599,20 @@ static void load_scene_file(const char *rel, drape_scene *s, drape_fabric *F)
                   err.msg);
 }
 
+/* The lattice (*L) and model of a loaded scene and fabric. */
+static drape_model *scene_model(const drape_scene *s, const drape_fabric *F, drape_lattice **L)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    *L = drape_lattice_new(s, F, &err);
+    ck_assert_msg(*L != NULL, "lattice: %s", err.msg);
+    drape_model_opts mo;
+    drape_model_opts_from_scene(s, &mo);
+    drape_model *m = drape_model_new(*L, F, &mo, &err);
+    ck_assert_msg(m != NULL, "model: %s", err.msg);
+    return m;
+}
+
 /* Total energy of the full state (x, v). */
 static double total_energy(drape_model *m, const drape_lattice *L, const double *x,
                            const double *v)
@@ -639,14 +653,10 @@ static void energy_steps(const char *rel, double air, double rtol, double t_end,
     load_scene_file(rel, &s, &F);
     s.damping_air = air;
     s.damping_edge = 0.0;
+    drape_lattice *L;
+    drape_model *m = scene_model(&s, &F, &L);
     drape_error err;
     drape_error_clear(&err);
-    drape_lattice *L = drape_lattice_new(&s, &F, &err);
-    ck_assert_msg(L != NULL, "lattice: %s", err.msg);
-    drape_model_opts mo;
-    drape_model_opts_from_scene(&s, &mo);
-    drape_model *m = drape_model_new(L, &F, &mo, &err);
-    ck_assert_msg(m != NULL, "model: %s", err.msg);
     drape_integrator_opts io;
     drape_integrator_opts_default(&io);
     io.rtol = rtol;
@@ -1662,14 +1672,8 @@ static void energy_drape_run(const char *rel, const char *integrator, double rto
     drape_scene s;
     drape_fabric F;
     load_scene_file(rel, &s, &F);
-    drape_error err;
-    drape_error_clear(&err);
-    drape_lattice *L = drape_lattice_new(&s, &F, &err);
-    ck_assert_msg(L != NULL, "lattice: %s", err.msg);
-    drape_model_opts mo;
-    drape_model_opts_from_scene(&s, &mo);
-    drape_model *m = drape_model_new(L, &F, &mo, &err);
-    ck_assert_msg(m != NULL, "model: %s", err.msg);
+    drape_lattice *L;
+    drape_model *m = scene_model(&s, &F, &L);
     int rows;
     double *x0 = h5_read(f, "/mesh/rest_positions", &rows, 3), ext = 0.0;
     ck_assert_int_eq(rows, L->n);
