@@ -55,7 +55,8 @@ static const char run_usage[] =
     "err_test_fails, conv_fails, and more: mass_kg, areas, max_speed_m_s (at the\n"
     "end), mean_speed_m_s (largest particle speed averaged over the last\n"
     "equilibrium check interval: what the equilibrium test compares), the static\n"
-    "solver's keys, linear_solver, lin_iters, lin_factors; null where the scene\n"
+    "solver's keys, linear_solver, lin_iters, lin_factors, integrator_switches\n"
+    "(auto: changes between cvode-bdf and arkode-erk); null where the scene\n"
     "does not produce one).  status is equilibrium, t_max, failed or interrupted.\n"
     "\n"
     "Options (override the scene file):\n"
@@ -106,7 +107,7 @@ const char *const drape_cli_run_keys[] = {
     "area_nominal_m2", "area_mesh_m2", "max_speed_m_s", "method", "iterations",
     "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
     "max_force_rel", "linear_solver", "lin_iters", "lin_factors", "mean_speed_m_s",
-    NULL};
+    "integrator_switches", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -125,7 +126,7 @@ typedef struct field {
     int is_int;
 } field;
 
-#define MAX_FIELDS 48
+#define MAX_FIELDS 64
 
 typedef struct result_fields {
     field f[MAX_FIELDS];
@@ -793,6 +794,7 @@ int drape_cli_run(int argc, char **argv)
             add_previous(&ri->ck, "conv_fails", &res.stats.conv_fails);
             add_previous(&ri->ck, "lin_iters", &res.stats.lin_iters);
             add_previous(&ri->ck, "lin_factors", &res.stats.lin_factors);
+            add_previous(&ri->ck, "integrator_switches", &res.stats.switches);
             const drape_kv *w = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "wall_s");
             if (w && !w->text && w->value >= 0) res.wall_s += w->value;
         }
@@ -878,6 +880,9 @@ int drape_cli_run(int argc, char **argv)
     /* the speed the equilibrium test used: largest particle speed averaged
      * over the last check interval (sim.h); null without checks */
     add_num(&r, "mean_speed_m_s", method_static ? NAN : res.check_speed);
+    /* auto only: how often it changed between cvode-bdf and arkode-erk */
+    add_int(&r, "integrator_switches",
+            !method_static && strcmp(res.integrator, "auto") == 0 ? (double)res.stats.switches : NAN);
     if (!fields_match_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -72,7 +72,7 @@ START_TEST(test_registry)
                       "no backend for %s", drape_integrator_names[k]);
     for (size_t k = 0; k < N_ALL; k++)
         ck_assert_str_eq(drape_integrator_type_find(ALL[k])->name, ALL[k]);
-    ck_assert_str_eq(drape_integrator_type_find("auto")->name, "cvode-bdf");
+    ck_assert_str_eq(drape_integrator_type_find("auto")->name, "auto");
     ck_assert_ptr_null(drape_integrator_type_find("rk4"));
 
     tf_scene t;
@@ -125,21 +125,22 @@ START_TEST(test_alloc_failures)
 {
     tf_scene t;
     ts_build(&t, 2.0, 0.02);
-    for (size_t k = 0; k < N_ALL; k++) {
+    for (size_t k = 0; k <= N_ALL; k++) { /* and auto (both of its solvers) */
+        const char *name = k < N_ALL ? ALL[k] : "auto";
         int done = 0;
-        for (long n = 1; n < 100 && !done; n++) {
+        for (long n = 1; n < 200 && !done; n++) {
             drape_integrator_opts o;
             drape_integrator_opts_default(&o);
             drape_error err;
             drape_error_clear(&err);
             drape_alloc_fail_at(n);
-            drape_integrator *I = drape_integrator_new(t.m, ALL[k], &o, &err);
+            drape_integrator *I = drape_integrator_new(t.m, name, &o, &err);
             drape_alloc_fail_at(0);
             if (I) {
                 done = 1;
                 drape_integrator_free(I);
             } else {
-                ck_assert_msg(err.kind == DRAPE_E_NOMEM, "%s, fail at %ld: %s", ALL[k], n,
+                ck_assert_msg(err.kind == DRAPE_E_NOMEM, "%s, fail at %ld: %s", name, n,
                               err.msg);
             }
         }
@@ -211,6 +212,102 @@ START_TEST(test_agreement)
     }
     drape_sim_result_free(&ref);
     drape_sim_result_free(&wit);
+    tf_free(&t);
+}
+END_TEST
+
+/* auto (cvode-bdf <-> arkode-erk, integrator_auto.c), 1: its own rule.
+ * With air drag only (no edge dashpots) the stretch vibrations of the
+ * swinging fixture are undamped and BDF2's steps shrink below the explicit
+ * stability step within 0.3 s, so auto must switch.  Until it does, it is
+ * cvode-bdf, whose BDF2 damps those vibrations (2.6e-3 of the side at
+ * rtol 1e-5, docs/integrators.md); so its error against gsl-rk8pd at 1e-10
+ * is bounded by twice cvode-bdf's own, not by 100 rtol. */
+START_TEST(test_auto_switches)
+{
+    const double t_end = 0.3, rtol = 1e-5;
+    tf_scene t;
+    ts_build(&t, 0.5, 0.0);
+    size_t n3 = 3 * (size_t)t.L->n;
+    drape_sim_opts o;
+    drape_sim_result ref, bdf, r;
+    drape_error err;
+    drape_error_clear(&err);
+    sim_opts(&o, "gsl-rk8pd", 1e-10, t_end);
+    ck_assert_msg(drape_sim_run(t.m, &o, NULL, NULL, &ref, &err) == 0, "%s", err.msg);
+    sim_opts(&o, "cvode-bdf", rtol, t_end);
+    ck_assert_msg(drape_sim_run(t.m, &o, NULL, NULL, &bdf, &err) == 0, "%s", err.msg);
+    sim_opts(&o, "auto", rtol, t_end);
+    ck_assert_msg(drape_sim_run(t.m, &o, NULL, NULL, &r, &err) == 0, "%s", err.msg);
+    ck_assert_str_eq(r.integrator, "auto");
+    ck_assert_int_eq(r.status, DRAPE_SIM_T_MAX);
+    ck_assert_msg(r.stats.switches >= 1, "auto never left cvode-bdf (%ld steps)", r.stats.steps);
+    ck_assert_int_eq(bdf.stats.switches, 0);
+    double e_bdf = max_abs_diff(bdf.x, ref.x, n3) / TF_SIDE;
+    double e_auto = max_abs_diff(r.x, ref.x, n3) / TF_SIDE;
+    ck_assert_msg(e_bdf > 100 * rtol, "cvode-bdf error %g: the premise changed", e_bdf);
+    ck_assert_msg(e_auto <= 2 * e_bdf, "auto: position error %g, cvode-bdf %g", e_auto, e_bdf);
+    drape_sim_result_free(&ref);
+    drape_sim_result_free(&bdf);
+    drape_sim_result_free(&r);
+    tf_free(&t);
+}
+END_TEST
+
+/* auto, 2: the switching itself.  A threshold of h omega 100 makes every
+ * judged BDF2 window hand over to arkode-erk and every probe fail, so the
+ * run alternates (BDF2 200 steps, Dormand-Prince 2000, ...).  On the damped
+ * fixture of test_agreement, where both solvers are within 100 rtol, the
+ * state at every output time, restarts and interpolation included, must
+ * stay within 100 rtol of gsl-rk8pd at 1e-10; the counters are the sums. */
+START_TEST(test_auto_forced_switches)
+{
+    const double t_end = 0.3, rtol = 1e-5;
+    const int n_out = 15;
+    tf_scene t;
+    ts_build(&t, 2.0, 0.02);
+    size_t n3 = 3 * (size_t)t.L->n;
+    double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
+    double *xr = malloc(sizeof(double) * n3);
+    ck_assert(x && v && xr);
+    drape_error err;
+    drape_error_clear(&err);
+    drape_integrator_opts io;
+    drape_integrator_opts_default(&io);
+    io.rtol = rtol;
+    io.atol = 1e-3 * rtol;
+    io.t_stop = t_end;
+    io.auto_hw = 100.0;
+    drape_integrator *I = drape_integrator_new(t.m, "auto", &io, &err);
+    ck_assert_msg(I != NULL, "%s", err.msg);
+    drape_integrator_opts ro = io;
+    ro.rtol = 1e-10;
+    ro.atol = 1e-13;
+    drape_integrator *R = drape_integrator_new(t.m, "gsl-rk8pd", &ro, &err);
+    ck_assert_msg(R != NULL, "%s", err.msg);
+    for (int k = 1; k <= n_out; k++) {
+        double tk = t_end * k / n_out;
+        ck_assert_msg(drape_integrator_step_to(R, tk, DRAPE_STEP_NORMAL, &err) == 0, "%s",
+                      err.msg);
+        drape_integrator_state(R, xr, NULL);
+        ck_assert_msg(drape_integrator_step_to(I, tk, DRAPE_STEP_NORMAL, &err) == 0, "%s",
+                      err.msg);
+        ck_assert_double_eq(drape_integrator_time(I), tk);
+        drape_integrator_state(I, x, v);
+        double dx = max_abs_diff(x, xr, n3) / TF_SIDE;
+        ck_assert_msg(dx <= 100 * rtol, "t = %g: position error %g", tk, dx);
+    }
+    drape_integrator_free(R);
+    drape_integrator_stats st;
+    drape_integrator_get_stats(I, &st);
+    ck_assert_msg(st.switches >= 3, "%ld switches", st.switches);
+    ck_assert_int_gt(st.steps, 2000);
+    ck_assert_int_gt(st.rhs_evals, st.steps);
+    ck_assert_int_gt(st.jac_evals, 0); /* cvode-bdf took part */
+    drape_integrator_free(I);
+    free(x);
+    free(v);
+    free(xr);
     tf_free(&t);
 }
 END_TEST
@@ -547,6 +644,8 @@ Suite *integrator_suite(void)
     tc = tcase_create("accuracy");
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_agreement);
+    tcase_add_test(tc, test_auto_switches);
+    tcase_add_test(tc, test_auto_forced_switches);
     tcase_add_test(tc, test_energy_conserved);
     tcase_add_test(tc, test_energy_dissipated);
     suite_add_tcase(s, tc);

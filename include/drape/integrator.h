@@ -27,7 +27,9 @@
  *                Jacobian; refused when its two dense matrices would exceed
  *                a memory limit;
  *   gsl-rk8pd    GSL Runge-Kutta Prince-Dormand 8(9), explicit;
- *   auto         currently cvode-bdf.
+ *   auto         cvode-bdf, switching to arkode-erk and back while it runs,
+ *                on a work estimate from its step sizes
+ *                (src/integrator_auto.c, docs/integrators.md).
  *
  * Errors.  Every solver failure sets a drape_error of kind DRAPE_E_NUMERIC
  * whose message names the integrator, the time, the solver's reason (the
@@ -65,6 +67,10 @@ typedef struct drape_integrator_opts {
                            side fails at once (unrecoverably), so step_to
                            returns within one evaluation (SIGINT/SIGTERM,
                            issue 7); NULL = never */
+    double auto_hw;     /* auto: BDF2's h omega below which it switches to
+                           arkode-erk; 0 = from the step Dormand-Prince took
+                           (integrator_auto.c;
+                           tests raise it to force switches) */
 } drape_integrator_opts;
 
 /* Linear solver of the Newton systems (I - gamma J) dy = r of cvode-bdf,
@@ -111,6 +117,8 @@ typedef struct drape_integrator_stats {
                          (SUNDIALS backends; 0 = not counted) */
     int linsol;     /* drape_linsol in use (KLU or SCHUR); 0 = none (explicit,
                        GSL's dense LU) */
+    long switches;  /* auto: changes between cvode-bdf and arkode-erk; 0 for
+                       the other backends */
 } drape_integrator_stats;
 
 /* ---- Backend interface --------------------------------------------------
@@ -170,9 +178,9 @@ extern const drape_integrator_type drape_integrator_arkode_dirk;
 extern const drape_integrator_type drape_integrator_arkode_erk;
 extern const drape_integrator_type drape_integrator_gsl_msbdf;
 extern const drape_integrator_type drape_integrator_gsl_rk8pd;
+extern const drape_integrator_type drape_integrator_auto;
 
-/* Registry: the backend called `name` ("auto" resolves to the default), or
- * NULL. */
+/* Registry: the backend called `name` (including "auto"), or NULL. */
 const drape_integrator_type *drape_integrator_type_find(const char *name);
 /* All backends, NULL-terminated (without "auto"). */
 const drape_integrator_type *const *drape_integrator_types(void);
@@ -210,7 +218,8 @@ int drape_integrator_state_at(drape_integrator *I, double t, double *x,
 
 void drape_integrator_get_stats(const drape_integrator *I,
                             drape_integrator_stats *s);
-/* Resolved backend name ("cvode-bdf" for "auto"). */
+/* Backend name ("auto" for auto; its result keys give the counts of both
+ * solvers it used). */
 const char *drape_integrator_name(const drape_integrator *I);
 /* Number of unknowns (6 n_free). */
 long drape_integrator_dim(const drape_integrator *I);

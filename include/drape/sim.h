@@ -114,7 +114,7 @@ typedef int (*drape_sim_observer)(void *ctx, const drape_sim_event *ev,
 
 typedef struct drape_sim_result {
     drape_sim_status status;
-    char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* resolved ("auto" -> backend) */
+    char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* backend name ("auto" for auto) */
     double t_end_s;      /* end of the run (failure: time the solver reached) */
     drape_integrator_stats stats;
     double wall_s;       /* integrator set-up and stepping, observers excluded */

@@ -144,7 +144,9 @@ def scene_block(name, rows):
     L.append(f"Scene `{name}`: {r0['scene']}, fabric {r0['fabric']}, {r0['particles']} particles "
              f"({r0['free_particles']} free), specimen size {g(r0['size_m'])} m, horizon "
              f"t_end = {g(r0['t_end_s'])} s, {r0['samples']} sample times; "
-             f"`auto` resolves to `{default}` here.")
+             + ("the default `auto` is swept as its own row." if default == "auto"
+                else f"`auto` resolves to `{default}` here." if default
+                else "the default `auto` was not swept."))
     L.append("")
     if ref:
         r = ref[0]
