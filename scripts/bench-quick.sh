@@ -64,7 +64,7 @@ print(",".join([scene, method, integ] + [r.get(k, "") for k in keys] + [cpu] + [
 PY
 }
 
-INTEGS=${BENCH_INTEGRATORS:-"static cvode-bdf arkode-imex arkode-dirk arkode-erk gsl-rk8pd gsl-msbdf"}
+INTEGS=${BENCH_INTEGRATORS:-"static auto cvode-bdf arkode-imex arkode-dirk arkode-erk gsl-rk8pd gsl-msbdf"}
 scene_list() { # scene csv-file
     for integ in $INTEGS; do
         if [ "$integ" = static ]; then run "$1" static static "$2"
