@@ -473,6 +473,7 @@ static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
     res->stats.steps = res->stats.rhs_evals = res->stats.jac_evals = -1;
     res->stats.lin_setups = res->stats.nonlin_iters = res->stats.err_test_fails = -1;
     res->stats.conv_fails = res->stats.lin_iters = res->stats.lin_factors = -1;
+    res->stats.switches = -1;
     res->max_speed = NAN;
     if (drape_equilibrium_solve(m, L->xinit, &eo, er, err) != 0) return 0;
     res->wall_s = er->wall_s;
@@ -880,9 +881,8 @@ int drape_cli_run(int argc, char **argv)
     /* the speed the equilibrium test used: largest particle speed averaged
      * over the last check interval (sim.h); null without checks */
     add_num(&r, "mean_speed_m_s", method_static ? NAN : res.check_speed);
-    /* auto only: how often it changed between cvode-bdf and arkode-erk */
-    add_int(&r, "integrator_switches",
-            !method_static && strcmp(res.integrator, "auto") == 0 ? (double)res.stats.switches : NAN);
+    /* auto only (-1, null, for the others): changes between cvode-bdf and arkode-erk */
+    add_int(&r, "integrator_switches", res.stats.switches);
     if (!fields_match_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -23,8 +23,9 @@
  *               cvode-bdf; a probe whose first judged window is below
  *               AUTO_HYST times the threshold goes back to arkode-erk.
  * A switch restarts the other solver from the accepted state at the
- * current internal time (both have dense output, so output times in between
- * are interpolated by the solver that stepped over them).
+ * current internal time, just before the next step (both have dense output,
+ * so output times in between are interpolated by the solver that stepped
+ * over them).
  */
 #include "drape/integrator.h"
 
@@ -55,6 +56,8 @@ typedef struct {
     const drape_integrator_type *type[2]; /* 0 cvode-bdf, 1 arkode-erk */
     void *st[2];
     int cur;               /* index of the active solver */
+    int next;              /* the solver judge() chose; taken at the next step
+                              (so the last step's dense output stays valid) */
     double omega;          /* rad/s, Gershgorin bound at the rest state */
     double theta;          /* fixed threshold (opts.auto_hw), 0 = from erk_hw */
     double erk_hw;         /* Dormand-Prince's h omega in its last window */
@@ -108,30 +111,29 @@ static double threshold(const auto_state *a)
     return a->theta > 0.0 ? a->theta : a->erk_hw / AUTO_COST;
 }
 
-/* After an accepted step: judge the window when it is full. */
-static int judge(auto_state *a, drape_error *err)
+/* After an accepted step: judge the window when it is full; sets a->next. */
+static void judge(auto_state *a)
 {
     a->spell_steps++;
-    if (++a->win_steps < AUTO_WINDOW) return 0;
+    if (++a->win_steps < AUTO_WINDOW) return;
     double hw = (a->t - a->win_t0) / (double)a->win_steps * a->omega;
     a->win_steps = 0;
     a->win_t0 = a->t;
-    if (a->windows++ == 0) return 0; /* ramp-up after a (re)start */
+    if (a->windows++ == 0) return; /* ramp-up after a (re)start */
     if (a->cur == 0) {
         double th = threshold(a);
         if (a->probing) {
             a->probing = 0;
-            if (hw < AUTO_HYST * th) return switch_to(a, 1, err);
+            if (hw < AUTO_HYST * th) a->next = 1;
         }
-        if (hw < th) return switch_to(a, 1, err);
+        if (hw < th) a->next = 1;
     } else {
         a->erk_hw = hw;
         if (a->spell_steps >= AUTO_PROBE && hw >= AUTO_ERK_STIFF) {
             a->probing = 1;
-            return switch_to(a, 0, err);
+            a->next = 0;
         }
     }
-    return 0;
 }
 
 static void auto_free(void *st)
@@ -164,7 +166,7 @@ static void *auto_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
     a->max_steps = o->max_steps > 0 ? o->max_steps : DRAPE_INTEGRATOR_MAX_STEPS_DEFAULT;
     a->theta = o->auto_hw;
     a->erk_hw = AUTO_ERK_HW0;
-    a->cur = 0;
+    a->cur = a->next = 0;
     a->t = t0;
     memcpy(a->y, y0, sizeof(double) * (size_t)ode->dim);
     restart_window(a);
@@ -181,7 +183,7 @@ static int auto_reinit(void *st, double t0, const double *y0, drape_error *err)
     auto_state *a = st;
     if (a->type[0]->reinit(a->st[0], t0, y0, err) != 0) return -1;
     memset(&a->acc, 0, sizeof a->acc);
-    a->cur = 0;
+    a->cur = a->next = 0;
     a->t = t0;
     memcpy(a->y, y0, sizeof(double) * (size_t)a->ode->dim);
     a->probing = 0;
@@ -195,36 +197,31 @@ static int auto_step_to(void *st, double t_out, drape_step_mode mode, double *t,
                         double *y, drape_error *err)
 {
     auto_state *a = st;
-    size_t bytes = sizeof(double) * (size_t)a->ode->dim;
-    if (mode == DRAPE_STEP_NORMAL && a->t >= t_out) /* stepped past it before */
+    int one = mode == DRAPE_STEP_ONE, rc = 0;
+    if (!one && a->t >= t_out) /* stepped past it before */
         goto interpolate;
     for (long n = 0;; n++) {
-        if (mode == DRAPE_STEP_NORMAL && n >= a->max_steps) {
-            *t = a->t;
-            memcpy(y, a->y, bytes);
-            return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
-                                   "auto (%s) failed at t = %.9g s: too much work (%ld steps "
-                                   "before t = %.9g s); hint: raise --max-steps, loosen rtol, "
-                                   "or look for a fault in the scene",
-                                   a->type[a->cur]->name, a->t, a->max_steps, t_out);
+        if (!one && n >= a->max_steps) {
+            rc = drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                                 "auto (%s) failed at t = %.9g s: too much work (%ld steps "
+                                 "before t = %.9g s); hint: raise --max-steps, loosen rtol, "
+                                 "or look for a fault in the scene",
+                                 a->type[a->cur]->name, a->t, a->max_steps, t_out);
+            break;
         }
-        if (a->type[a->cur]->step_to(a->st[a->cur], t_out, DRAPE_STEP_ONE, &a->t, a->y, err)) {
-            *t = a->t;
-            memcpy(y, a->y, bytes);
-            return -1;
+        if ((a->next != a->cur && switch_to(a, a->next, err) != 0) ||
+            a->type[a->cur]->step_to(a->st[a->cur], t_out, DRAPE_STEP_ONE, &a->t, a->y, err)) {
+            rc = -1;
+            break;
         }
-        if (mode == DRAPE_STEP_ONE || a->t >= t_out) break;
-        if (a->omega > 0.0 && judge(a, err) != 0) {
-            *t = a->t;
-            memcpy(y, a->y, bytes);
-            return -1;
-        }
+        /* a step that passes t_out is not judged in NORMAL mode */
+        if (a->omega > 0.0 && (one || a->t < t_out)) judge(a);
+        if (one || a->t >= t_out) break;
     }
-    if (mode == DRAPE_STEP_ONE || a->t == t_out) {
+    if (rc != 0 || one || a->t == t_out) {
         *t = a->t;
-        memcpy(y, a->y, bytes);
-        if (mode == DRAPE_STEP_ONE && a->omega > 0.0 && judge(a, err) != 0) return -1;
-        return 0;
+        memcpy(y, a->y, sizeof(double) * (size_t)a->ode->dim);
+        return rc;
     }
 interpolate:
     if (a->type[a->cur]->get_state(a->st[a->cur], t_out, y, err) != 0) return -1;
@@ -244,7 +241,7 @@ static void auto_stats(const void *st, drape_integrator_stats *r)
     a->type[a->cur]->stats(a->st[a->cur], r);
     add_stats(r, &a->acc);
     r->switches = a->switches;
-    if (a->acc.steps > 0 || a->cur != 0) { /* cvode-bdf's solver, if it ran */
+    if (a->cur != 0) { /* cvode-bdf's linear solver (it always ran first) */
         drape_integrator_stats b;
         a->type[0]->stats(a->st[0], &b);
         r->linsol = b.linsol;

@@ -222,6 +222,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     r->status = DRAPE_SIM_FAILED;
     r->eq_below_since = -1.0;
     r->check_speed = NAN;
+    r->stats.switches = -1; /* no integrator yet: not available */
     r->diagnosis.kind = DRAPE_DIAG_NONE;
     r->diagnosis.term = "";
     if (check_opts(o, err)) return -1;

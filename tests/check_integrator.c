@@ -242,7 +242,7 @@ START_TEST(test_auto_switches)
     ck_assert_str_eq(r.integrator, "auto");
     ck_assert_int_eq(r.status, DRAPE_SIM_T_MAX);
     ck_assert_msg(r.stats.switches >= 1, "auto never left cvode-bdf (%ld steps)", r.stats.steps);
-    ck_assert_int_eq(bdf.stats.switches, 0);
+    ck_assert_int_eq(bdf.stats.switches, -1); /* not available: it never switches */
     double e_bdf = max_abs_diff(bdf.x, ref.x, n3) / TF_SIDE;
     double e_auto = max_abs_diff(r.x, ref.x, n3) / TF_SIDE;
     ck_assert_msg(e_bdf > 100 * rtol, "cvode-bdf error %g: the premise changed", e_bdf);
@@ -267,9 +267,8 @@ START_TEST(test_auto_forced_switches)
     tf_scene t;
     ts_build(&t, 2.0, 0.02);
     size_t n3 = 3 * (size_t)t.L->n;
-    double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
-    double *xr = malloc(sizeof(double) * n3);
-    ck_assert(x && v && xr);
+    double *x = malloc(sizeof(double) * n3), *xr = malloc(sizeof(double) * n3);
+    ck_assert(x && xr);
     drape_error err;
     drape_error_clear(&err);
     drape_integrator_opts io;
@@ -293,7 +292,7 @@ START_TEST(test_auto_forced_switches)
         ck_assert_msg(drape_integrator_step_to(I, tk, DRAPE_STEP_NORMAL, &err) == 0, "%s",
                       err.msg);
         ck_assert_double_eq(drape_integrator_time(I), tk);
-        drape_integrator_state(I, x, v);
+        drape_integrator_state(I, x, NULL);
         double dx = max_abs_diff(x, xr, n3) / TF_SIDE;
         ck_assert_msg(dx <= 100 * rtol, "t = %g: position error %g", tk, dx);
     }
@@ -306,7 +305,6 @@ START_TEST(test_auto_forced_switches)
     ck_assert_int_gt(st.jac_evals, 0); /* cvode-bdf took part */
     drape_integrator_free(I);
     free(x);
-    free(v);
     free(xr);
     tf_free(&t);
 }

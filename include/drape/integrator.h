@@ -117,7 +117,7 @@ typedef struct drape_integrator_stats {
                          (SUNDIALS backends; 0 = not counted) */
     int linsol;     /* drape_linsol in use (KLU or SCHUR); 0 = none (explicit,
                        GSL's dense LU) */
-    long switches;  /* auto: changes between cvode-bdf and arkode-erk; 0 for
+    long switches;  /* auto: changes between cvode-bdf and arkode-erk; -1 for
                        the other backends */
 } drape_integrator_stats;
 
