@@ -105,7 +105,7 @@ machine() {
     [ -n "$(git status --porcelain -- src include 2>/dev/null)" ] && commit="$commit + uncommitted changes"
     {
         echo "cpu=$cpu"; echo "cores=$(nproc)"; echo "mem=$mem"; echo "os=$os"
-        echo "commit=$commit"; echo "cflags=${CFLAGS:--O2 -g}"; echo "date=$(date -u +%F)"
+        echo "commit=$commit"; echo "cflags=${CFLAGS:--O3 -g}"; echo "date=$(date -u +%F)"
     } > "$OUT/machine.txt"
 }
 

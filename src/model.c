@@ -65,6 +65,7 @@
 
 #define PARTS_CONSERVATIVE (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR)
 #define PARTS_DISSIPATIVE (DRAPE_PART_AIR | DRAPE_PART_EDGE)
+#define PARTS_SEGMENTS (PARTS_CONSERVATIVE | DRAPE_PART_EDGE)
 
 struct drape_model {
     const drape_lattice *L;
@@ -86,6 +87,20 @@ struct drape_model {
     double *invm_row;   /* N: 1/m of the particle owning a free coordinate */
     double *Kw, *Dw;    /* nnz(K) workspaces */
     double *rowsum;     /* N */
+    /* Segment cache: every neighbour pair an element uses, oriented from
+     * its lower particle id a to the higher b (d = x_b - x_a).  eval()
+     * measures each segment once, not once per element that shares it
+     * (an interior particle's two segments serve 14 element edges).  An
+     * element's edge vector is +d or -d of one segment: ref = 2 s + flip. */
+    int nseg;
+    int *seg_ab;          /* 2 per segment: a, b */
+    int *eref;            /* 1 per edge (x_b - x_a) */
+    int *href;            /* 2 per hinge (x_mid - x_prev, x_next - x_mid) */
+    int *cref;            /* 2 per corner (x_warp - x_mid, x_weft - x_mid) */
+    double *seg_d;        /* 3 per segment: d */
+    double *seg_l;        /* |d| */
+    double *seg_u;        /* 3 per segment: d * (1 / |d|) */
+    unsigned char *seg_bad; /* 1: shorter than MODEL_LEN_TINY sigma or not finite */
 };
 
 /* ---------------------------------------------------------------- vectors */
@@ -124,25 +139,36 @@ typedef struct angle_geo {
     double angle;          /* atan2(s, c) in [0, pi] */
 } angle_geo;
 
-/* Fill G for edges a, b.  Returns 1 if an edge is shorter than lmin (or
- * not finite), else 0.  Only what `need` asks for beyond the edges, s, c,
- * sn, cn and w is computed: GEO_ANGLE the angle (one atan2), GEO_HESS the
- * unit vectors ua, ub of the Hessian (the force path needs neither). */
+/* Only what `need` asks for beyond the edges, s, c, sn, cn and w is
+ * computed: GEO_ANGLE the angle (one atan2), GEO_HESS the unit vectors ua,
+ * ub of the Hessian (the force path needs neither). */
 enum { GEO_ANGLE = 1, GEO_HESS = 2 };
-static int angle_geo_set(const double *a, const double *b, double lmin,
-                         unsigned need, angle_geo *G)
+static void angle_geo_finish(unsigned need, angle_geo *G);
+
+/* Fill G for the edges of segment refs ra, rb (the segment cache of the
+ * current evaluation; the same operations as measuring a and b afresh, so
+ * the same bits).  Returns 1 if either segment is degenerate, else 0. */
+static int angle_geo_set(const drape_model *m, int ra, int rb, unsigned need,
+                         angle_geo *G)
+{
+    int sa = ra >> 1, sb = rb >> 1;
+    if (m->seg_bad[sa] || m->seg_bad[sb]) return 1;
+    double fa = (ra & 1) ? -1.0 : 1.0, fb = (rb & 1) ? -1.0 : 1.0;
+    const double *ua = m->seg_u + 3 * (int64_t)sa, *ub = m->seg_u + 3 * (int64_t)sb;
+    G->la = m->seg_l[sa];
+    G->lb = m->seg_l[sb];
+    for (int k = 0; k < 3; k++) {
+        G->ah[k] = fa * ua[k];  /* exact: a sign change */
+        G->bh[k] = fb * ub[k];
+    }
+    angle_geo_finish(need, G);
+    return 0;
+}
+
+/* The rest of G from the unit edges ah, bh. */
+static void angle_geo_finish(unsigned need, angle_geo *G)
 {
     double n[3], h;
-    G->la = norm3(a);
-    G->lb = norm3(b);
-    if (!(G->la > lmin) || !(G->lb > lmin) || !isfinite(G->la) ||
-        !isfinite(G->lb))
-        return 1;
-    double ila = 1.0 / G->la, ilb = 1.0 / G->lb;
-    for (int k = 0; k < 3; k++) {
-        G->ah[k] = a[k] * ila;
-        G->bh[k] = b[k] * ilb;
-    }
     cross3(G->ah, G->bh, n);
     G->s = norm3(n);
     G->c = dot3(G->ah, G->bh);
@@ -161,7 +187,6 @@ static int angle_geo_set(const double *a, const double *b, double lmin,
     h = sqrt(G->s * G->s + G->c * G->c);
     G->sn = G->s / h;
     G->cn = G->c / h;
-    return 0;
 }
 
 /* Gradient of g(angle) with respect to a and b, given r = g'/sin. */
@@ -291,14 +316,24 @@ static const double HINGE_CB[3] = {0.0, -1.0, 1.0}; /* b = x_next - x_mid */
 static const double CORNER_CA[3] = {-1.0, 1.0, 0.0}; /* a = x_warp - x_mid */
 static const double CORNER_CB[3] = {-1.0, 0.0, 1.0}; /* b = x_weft - x_mid */
 
+/* Edge vector of segment ref into d; 1 if the segment is degenerate. */
+static int seg_edge(const drape_model *m, int ref, double *d)
+{
+    int s = ref >> 1;
+    const double *sd = m->seg_d + 3 * (int64_t)s;
+    double f = (ref & 1) ? -1.0 : 1.0;
+    if (m->seg_bad[s]) return 1;
+    for (int k = 0; k < 3; k++) d[k] = f * sd[k];
+    return 0;
+}
+
 /* Stretch edge: local force (a, b) and df/dx.  Returns 1 if degenerate. */
-static int kern_stretch(const drape_model *m, const drape_edge *e,
-                        const double *x, double *fl, double Jl[9][9])
+static int kern_stretch(const drape_model *m, const drape_edge *e, int ref,
+                        double *fl, double Jl[9][9])
 {
     double d[3], u[3], sg = m->L->sigma;
-    sub3(x + 3 * e->b, x + 3 * e->a, d);
-    double l = norm3(d);
-    if (!(l > MODEL_LEN_TINY * sg) || !isfinite(l)) return 1;
+    if (seg_edge(m, ref, d)) return 1;
+    double l = m->seg_l[ref >> 1];
     double kw = m->F.k[e->dir] * e->weight;
     for (int k = 0; k < 3; k++) u[k] = d[k] / l;
     double t = kw * (l - sg);
@@ -323,15 +358,14 @@ static int kern_stretch(const drape_model *m, const drape_edge *e,
 
 /* Edge dashpot: local force, df/dx (Jl) and df/dv (Dl), either may be NULL.
  * v NULL means zero velocities. */
-static int kern_dashpot(const drape_model *m, const drape_edge *e,
-                        const double *x, const double *v, double *fl,
-                        double Jl[9][9], double Dl[9][9])
+static int kern_dashpot(const drape_model *m, const drape_edge *e, int ref,
+                        const double *v, double *fl, double Jl[9][9],
+                        double Dl[9][9])
 {
     double d[3], u[3] = {0.0, 0.0, 0.0}, dv[3] = {0.0, 0.0, 0.0};
     double c = m->o.c_edge;
-    sub3(x + 3 * e->b, x + 3 * e->a, d);
-    double l = norm3(d);
-    if (!(l > MODEL_LEN_TINY * m->L->sigma) || !isfinite(l)) return 1;
+    if (seg_edge(m, ref, d)) return 1;
+    double l = m->seg_l[ref >> 1];
     for (int k = 0; k < 3; k++) u[k] = d[k] / l;
     if (v) sub3(v + 3 * e->b, v + 3 * e->a, dv);
     double w = dot3(dv, u);
@@ -369,14 +403,11 @@ static int kern_dashpot(const drape_model *m, const drape_edge *e,
 
 /* Bending hinge: particles (prev, mid, next). */
 static int kern_bend(const drape_model *m, const drape_hinge *h,
-                     const double *x, double *fl, double Jl[9][9])
+                     const int *ref, double *fl, double Jl[9][9])
 {
-    double a[3], b[3], gop, g2, ratio;
+    double gop, g2, ratio;
     angle_geo G;
-    sub3(x + 3 * h->mid, x + 3 * h->prev, a);
-    sub3(x + 3 * h->next, x + 3 * h->mid, b);
-    if (angle_geo_set(a, b, MODEL_LEN_TINY * m->L->sigma,
-                      GEO_ANGLE | (Jl ? GEO_HESS : 0u), &G))
+    if (angle_geo_set(m, ref[0], ref[1], GEO_ANGLE | (Jl ? GEO_HESS : 0u), &G))
         return 1;
     if (G.s < MODEL_SIN_TINY && G.c < 0.0) return 1;
     double psi = G.angle;
@@ -396,13 +427,11 @@ static int kern_bend(const drape_model *m, const drape_hinge *h,
 /* Shear corner: particles (mid, warp, weft).  g(alpha) = E(pi/2 - alpha),
  * so g' = -dE/dgamma and g'' = d2E/dgamma2. */
 static int kern_shear(const drape_model *m, const drape_corner *cn,
-                      const double *x, double *fl, double Jl[9][9])
+                      const int *ref, double *fl, double Jl[9][9])
 {
-    double a[3], b[3], d1, d2;
+    double d1, d2;
     angle_geo G;
-    sub3(x + 3 * cn->warp, x + 3 * cn->mid, a);
-    sub3(x + 3 * cn->weft, x + 3 * cn->mid, b);
-    if (angle_geo_set(a, b, MODEL_LEN_TINY * m->L->sigma, Jl ? GEO_HESS : 0u, &G))
+    if (angle_geo_set(m, ref[0], ref[1], Jl ? GEO_HESS : 0u, &G))
         return 1;
     if (G.s < MODEL_SIN_TINY) return 1;
     double gamma = atan2(G.c, G.s);
@@ -438,6 +467,22 @@ static void add_blocks(const drape_model *m, const int64_t *slots,
     }
 }
 
+/* Fill the segment cache for positions x. */
+static void measure_segments(drape_model *m, const double *x)
+{
+    double lmin = MODEL_LEN_TINY * m->L->sigma;
+    for (int s = 0; s < m->nseg; s++) {
+        double *d = m->seg_d + 3 * (int64_t)s, *u = m->seg_u + 3 * (int64_t)s;
+        const int *ab = m->seg_ab + 2 * (int64_t)s;
+        sub3(x + 3 * (int64_t)ab[1], x + 3 * (int64_t)ab[0], d);
+        double l = norm3(d);
+        m->seg_l[s] = l;
+        m->seg_bad[s] = !(l > lmin) || !isfinite(l);
+        double il = 1.0 / l;
+        for (int k = 0; k < 3; k++) u[k] = d[k] * il;
+    }
+}
+
 static int all_finite(const double *a, int64_t n)
 {
     double acc = 0.0;
@@ -456,6 +501,7 @@ static int eval(drape_model *m, unsigned parts, const double *x,
     int rc = 0;
 
     parts &= m->parts;
+    if (parts & PARTS_SEGMENTS) measure_segments(m, x);
     if (f) memset(f, 0, sizeof(double) * 3 * (size_t)L->n);
     if (K) memset(K, 0, sizeof(double) * (size_t)nnz);
     if (D) memset(D, 0, sizeof(double) * (size_t)nnz);
@@ -463,7 +509,7 @@ static int eval(drape_model *m, unsigned parts, const double *x,
     if (parts & DRAPE_PART_STRETCH) {
         for (int e = 0; e < L->n_edges && !rc; e++) {
             const drape_edge *E = &L->edges[e];
-            if (kern_stretch(m, E, x, fl, K ? Jl : NULL)) { rc = 1; break; }
+            if (kern_stretch(m, E, m->eref[e], fl, K ? Jl : NULL)) { rc = 1; break; }
             ids[0] = E->a; ids[1] = E->b;
             if (f) add_forces(f, ids, 2, fl);
             if (K) add_blocks(m, m->eslot + 4 * (int64_t)e, ids, 2, Jl, K);
@@ -472,7 +518,7 @@ static int eval(drape_model *m, unsigned parts, const double *x,
     if (!rc && (parts & DRAPE_PART_EDGE)) {
         for (int e = 0; e < L->n_edges; e++) {
             const drape_edge *E = &L->edges[e];
-            if (kern_dashpot(m, E, x, v, fl, K ? Jl : NULL, D ? Dl : NULL)) {
+            if (kern_dashpot(m, E, m->eref[e], v, fl, K ? Jl : NULL, D ? Dl : NULL)) {
                 rc = 1;
                 break;
             }
@@ -485,7 +531,7 @@ static int eval(drape_model *m, unsigned parts, const double *x,
     if (!rc && (parts & DRAPE_PART_BEND)) {
         for (int h = 0; h < L->n_hinges; h++) {
             const drape_hinge *H = &L->hinges[h];
-            if (kern_bend(m, H, x, fl, K ? Jl : NULL)) { rc = 1; break; }
+            if (kern_bend(m, H, m->href + 2 * (int64_t)h, fl, K ? Jl : NULL)) { rc = 1; break; }
             ids[0] = H->prev; ids[1] = H->mid; ids[2] = H->next;
             if (f) add_forces(f, ids, 3, fl);
             if (K) add_blocks(m, m->hslot + 9 * (int64_t)h, ids, 3, Jl, K);
@@ -494,7 +540,7 @@ static int eval(drape_model *m, unsigned parts, const double *x,
     if (!rc && (parts & DRAPE_PART_SHEAR)) {
         for (int c = 0; c < L->n_corners; c++) {
             const drape_corner *C = &L->corners[c];
-            if (kern_shear(m, C, x, fl, K ? Jl : NULL)) { rc = 1; break; }
+            if (kern_shear(m, C, m->cref + 2 * (int64_t)c, fl, K ? Jl : NULL)) { rc = 1; break; }
             ids[0] = C->mid; ids[1] = C->warp; ids[2] = C->weft;
             if (f) add_forces(f, ids, 3, fl);
             if (K) add_blocks(m, m->cslot + 9 * (int64_t)c, ids, 3, Jl, K);
@@ -906,6 +952,90 @@ static int build_first_order(drape_model *m, const int64_t *dcol, const int *dro
     return 0;
 }
 
+static int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Segment ref of the edge vector x_to - x_from (keys: sorted lo * n + hi). */
+static int seg_ref(const int64_t *keys, int nseg, int n, int from, int to)
+{
+    int lo = from < to ? from : to, hi = from < to ? to : from;
+    int64_t key = (int64_t)lo * n + hi;
+    const int64_t *k = bsearch(&key, keys, (size_t)nseg, sizeof *keys, cmp_i64);
+    return 2 * (int)(k - keys) + (to == hi ? 0 : 1);
+}
+
+/* The segment cache's pairs and each element's refs (struct drape_model). */
+static int build_segments(drape_model *m, int edges, int hinges, int corners)
+{
+    const drape_lattice *L = m->L;
+    int64_t n = L->n, cap = 0, nk = 0;
+    if (edges) cap += L->n_edges;
+    if (hinges) cap += 2 * (int64_t)L->n_hinges;
+    if (corners) cap += 2 * (int64_t)L->n_corners;
+    int64_t *keys = drape_malloc(sizeof *keys * (size_t)(cap > 0 ? cap : 1));
+    if (!keys) return -1;
+#define SEG_KEY(p, q) ((p) < (q) ? (int64_t)(p) * n + (q) : (int64_t)(q) * n + (p))
+    if (edges)
+        for (int e = 0; e < L->n_edges; e++) keys[nk++] = SEG_KEY(L->edges[e].a, L->edges[e].b);
+    if (hinges)
+        for (int h = 0; h < L->n_hinges; h++) {
+            const drape_hinge *H = &L->hinges[h];
+            keys[nk++] = SEG_KEY(H->prev, H->mid);
+            keys[nk++] = SEG_KEY(H->mid, H->next);
+        }
+    if (corners)
+        for (int c = 0; c < L->n_corners; c++) {
+            const drape_corner *C = &L->corners[c];
+            keys[nk++] = SEG_KEY(C->mid, C->warp);
+            keys[nk++] = SEG_KEY(C->mid, C->weft);
+        }
+#undef SEG_KEY
+    if (nk > 0) qsort(keys, (size_t)nk, sizeof *keys, cmp_i64);
+    int64_t ns = 0;
+    for (int64_t k = 0; k < nk; k++)
+        if (ns == 0 || keys[k] != keys[ns - 1]) keys[ns++] = keys[k];
+    size_t z = (size_t)(ns > 0 ? ns : 1);
+    m->nseg = (int)ns;
+    m->seg_ab = drape_malloc(sizeof(int) * 2 * z);
+    m->seg_d = drape_malloc(sizeof(double) * 3 * z);
+    m->seg_u = drape_malloc(sizeof(double) * 3 * z);
+    m->seg_l = drape_malloc(sizeof(double) * z);
+    m->seg_bad = drape_malloc(z);
+    if (edges) m->eref = drape_malloc(sizeof(int) * (size_t)(L->n_edges > 0 ? L->n_edges : 1));
+    if (hinges) m->href = drape_malloc(sizeof(int) * 2 * (size_t)(L->n_hinges > 0 ? L->n_hinges : 1));
+    if (corners) m->cref = drape_malloc(sizeof(int) * 2 * (size_t)(L->n_corners > 0 ? L->n_corners : 1));
+    if (!m->seg_ab || !m->seg_d || !m->seg_u || !m->seg_l || !m->seg_bad ||
+        (edges && !m->eref) || (hinges && !m->href) || (corners && !m->cref)) {
+        drape_free(keys);
+        return -1;
+    }
+    for (int64_t s = 0; s < ns; s++) {
+        m->seg_ab[2 * s] = (int)(keys[s] / n);
+        m->seg_ab[2 * s + 1] = (int)(keys[s] % n);
+    }
+    int nsi = (int)ns, ni = (int)n;
+    if (edges)
+        for (int e = 0; e < L->n_edges; e++)
+            m->eref[e] = seg_ref(keys, nsi, ni, L->edges[e].a, L->edges[e].b);
+    if (hinges)
+        for (int h = 0; h < L->n_hinges; h++) {
+            const drape_hinge *H = &L->hinges[h];
+            m->href[2 * h] = seg_ref(keys, nsi, ni, H->prev, H->mid);
+            m->href[2 * h + 1] = seg_ref(keys, nsi, ni, H->mid, H->next);
+        }
+    if (corners)
+        for (int c = 0; c < L->n_corners; c++) {
+            const drape_corner *C = &L->corners[c];
+            m->cref[2 * c] = seg_ref(keys, nsi, ni, C->mid, C->warp);
+            m->cref[2 * c + 1] = seg_ref(keys, nsi, ni, C->mid, C->weft);
+        }
+    drape_free(keys);
+    return 0;
+}
+
 static int check_lattice(const drape_lattice *L)
 {
     int n = L->n;
@@ -1005,6 +1135,7 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
         m->cslot = element_slots(L, bcol, brow, L->n_corners, 3, corner_ids);
         if (!m->cslot) goto nomem;
     }
+    if (build_segments(m, use_edges, use_hinges, use_corners)) goto nomem;
     if (m->parts & DRAPE_PART_EDGE) {
         if (build_blocks(L, 1, 0, 0, &dcol, &drow)) goto nomem;
     }
@@ -1044,5 +1175,13 @@ void drape_model_free(drape_model *m)
     drape_free(m->Kw);
     drape_free(m->Dw);
     drape_free(m->rowsum);
+    drape_free(m->seg_ab);
+    drape_free(m->eref);
+    drape_free(m->href);
+    drape_free(m->cref);
+    drape_free(m->seg_d);
+    drape_free(m->seg_u);
+    drape_free(m->seg_l);
+    drape_free(m->seg_bad);
     drape_free(m);
 }

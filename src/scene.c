@@ -727,7 +727,7 @@ static int parse_tol(const scene_ctx *c, const drape_ynode *m,
 {
     char path[PATH_MAX_KEY];
     const drape_ynode *v = drape_ynode_get(m, key, NULL);
-    double t;
+    double t = 0.0;
     if (!v) return 0;
     key_path(path, sizeof path, "solver", key);
     if (parse_quantity(c, v, path, DRAPE_DIM_NONE, "number in (0, 1)", Q_ANY,

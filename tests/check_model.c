@@ -847,6 +847,67 @@ START_TEST(test_invariance)
 }
 END_TEST
 
+/* The order in which an element lists its particles is a label: edges
+ * listed (b, a) instead of (a, b) and hinges (next, mid, prev) give the same
+ * forces, K and D.  In the model's segment cache the reversed elements read
+ * their edge vectors with the other sign. */
+START_TEST(test_orientation)
+{
+    static const int fix[2] = {0, 4};
+    drape_lattice *L = tl_grid(5, 5, SIG, fix, 2);
+    drape_lattice *R = tl_grid(5, 5, SIG, fix, 2);
+    for (int e = 0; e < R->n_edges; e++) {
+        int t = R->edges[e].a;
+        R->edges[e].a = R->edges[e].b;
+        R->edges[e].b = t;
+    }
+    for (int h = 0; h < R->n_hinges; h++) {
+        int t = R->hinges[h].prev;
+        R->hinges[h].prev = R->hinges[h].next;
+        R->hinges[h].next = t;
+    }
+    int n3 = 3 * L->n;
+    double *x = perturbed(L, 0.2 * SIG, 4243);
+    double *v = perturbed(L, 0.05, 78);
+    for (int i = 0; i < n3; i++) v[i] -= L->x0[i];
+    double *f = malloc(sizeof(double) * n3), *g = malloc(sizeof(double) * n3);
+    ck_assert(f && g);
+    double worst = 0.0;
+    for (int form = 0; form < 2; form++) {
+        drape_model *a = tm_new(L, DRAPE_TERM_ALL, (drape_energy_form)form, 2.0, 0.02);
+        drape_model *b = tm_new(R, DRAPE_TERM_ALL, (drape_energy_form)form, 2.0, 0.02);
+        const drape_pattern *P = drape_model_pattern(a), *Q = drape_model_pattern(b);
+        ck_assert_int_eq(P->nnz, Q->nnz);
+        double *Ka = malloc(sizeof(double) * (size_t)P->nnz), *Da = malloc(sizeof(double) * (size_t)P->nnz);
+        double *Kb = malloc(sizeof(double) * (size_t)P->nnz), *Db = malloc(sizeof(double) * (size_t)P->nnz);
+        ck_assert(Ka && Da && Kb && Db);
+        ck_assert_int_eq(drape_model_forces(a, DRAPE_PART_ALL, x, v, f), 0);
+        ck_assert_int_eq(drape_model_forces(b, DRAPE_PART_ALL, x, v, g), 0);
+        double fs = vmax(f, n3), dF = 0.0;
+        for (int i = 0; i < n3; i++) dF = fmax(dF, fabs(f[i] - g[i]));
+        ck_assert_msg(fs > 0.0 && dF <= 1e-12 * fs, "forces differ by %g of %g", dF, fs);
+        ck_assert_int_eq(drape_model_jacobian(a, DRAPE_PART_ALL, x, v, Ka, Da), 0);
+        ck_assert_int_eq(drape_model_jacobian(b, DRAPE_PART_ALL, x, v, Kb, Db), 0);
+        double ks = vmax(Ka, (int)P->nnz), ds = vmax(Da, (int)P->nnz), dK = 0.0, dD = 0.0;
+        for (int64_t k = 0; k < P->nnz; k++) {
+            ck_assert_int_eq(P->rowind[k], Q->rowind[k]);
+            dK = fmax(dK, fabs(Ka[k] - Kb[k]));
+            dD = fmax(dD, fabs(Da[k] - Db[k]));
+        }
+        ck_assert_msg(ks > 0.0 && dK <= 1e-12 * ks, "K differs by %g of %g", dK, ks);
+        ck_assert_msg(ds > 0.0 && dD <= 1e-12 * ds, "D differs by %g of %g", dD, ds);
+        worst = fmax(worst, fmax(dF / fs, fmax(dK / ks, dD / ds)));
+        free(Ka); free(Da); free(Kb); free(Db);
+        drape_model_free(a);
+        drape_model_free(b);
+    }
+    if (verbose()) printf("orientation: worst relative difference %.3g\n", worst);
+    free(x); free(v); free(f); free(g);
+    tl_free(L);
+    tl_free(R);
+}
+END_TEST
+
 /* A hinge of length 1/2 spreads psi over sigma/2 (lattice.h): by hand,
  * E = w sigma^2 Wb(psi / (sigma/2)) (consistent) and
  * E = w sigma^2 M(K) K / 2 with K = 2 psi / (sigma/2) (seed). */
@@ -1458,6 +1519,7 @@ Suite *model_suite(void)
     TCase *tp = tcase_create("physics");
     tcase_set_timeout(tp, 120);
     tcase_add_test(tp, test_invariance);
+    tcase_add_test(tp, test_orientation);
     tcase_add_test(tp, test_hinge_length);
     tcase_add_test(tp, test_uniform_stretch);
     tcase_add_test(tp, test_uniform_bend);
