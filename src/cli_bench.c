@@ -86,6 +86,8 @@ static const char bench_usage[] =
     "                          from HI down to LO (default " BENCH_DEFAULT_RTOLS ")\n"
     "  --atol-scale LEN        atol = rtol * LEN (default 1 mm)\n"
     "  --linear-solver NAME    auto (default), klu, schur or schur-direct\n"
+    "  --max-order N           highest BDF order of cvode-bdf (also inside auto),\n"
+    "                          1 to 5 (default: the scene's solver.max_order, else 2)\n"
     "  --t-end T               horizon (default: the scene's t_max)\n"
     "  --samples K             sample times for err_pos_rel (default 10)\n"
     "  --repeat N              time a point as the minimum of N runs; runs\n"
@@ -113,13 +115,14 @@ static const char bench_usage[] =
     "  -h, --help              show this help\n"
     "\n"
     "CSV columns: role (ref, ref-check, sweep), scene, fabric, particles,\n"
-    "free_particles, size_m, t_end_s, samples, integrator, default (1 for the\n"
-    "integrator `auto' resolves to), linear_solver, rtol, atol_m, status (ok,\n"
+    "free_particles, size_m, t_end_s, samples, integrator, default (1 for\n"
+    "`auto', the default integrator), linear_solver, rtol, atol_m, status (ok,\n"
     "failed, timeout, skipped), wall_s (minimum over repeats, integrator set-up\n"
     "and stepping), cpu_s (minimum, the run's process CPU time), repeats,\n"
     "steps, rhs_evals, jac_evals, lin_setups, lin_factors, nonlin_iters,\n"
     "err_test_fails, conv_fails, err_pos_rel, err_pos_rms_rel, err_final_rel,\n"
-    "err_final_v_rel, dc, dc_ref, err_dc, nodes, message.  Empty = not available.\n"
+    "err_final_v_rel, dc, dc_ref, err_dc, nodes, message, max_order (cvode-bdf\n"
+    "and auto).  Empty = not available.\n"
     "--kernels columns: side, particles, free_particles, nnz_K, rhs_ms, jac_ms\n"
     "(K and D), jac_first_order_ms, schur_factor_ms, rhs_us_per_free,\n"
     "jac_us_per_free.\n"
@@ -135,7 +138,7 @@ static const char *const bench_columns[] = {
     "wall_s", "cpu_s", "repeats", "steps", "rhs_evals", "jac_evals", "lin_setups",
     "lin_factors", "nonlin_iters", "err_test_fails", "conv_fails", "err_pos_rel",
     "err_pos_rms_rel", "err_final_rel", "err_final_v_rel", "dc", "dc_ref", "err_dc",
-    "nodes", "message", NULL};
+    "nodes", "message", "max_order", NULL};
 
 static const char *const kernel_columns[] = {
     "side", "particles", "free_particles", "nnz_K", "rhs_ms", "jac_ms",
@@ -616,6 +619,9 @@ static void write_row(FILE *o, const bench *b, const bench_point *p)
     if (p->nodes >= 0) fprintf(o, "%d", p->nodes);
     fputc(',', o);
     drape_cli_csv_put(o, p->msg);
+    fputc(',', o);
+    if (strcmp(p->integrator, "cvode-bdf") == 0 || strcmp(p->integrator, "auto") == 0)
+        fprintf(o, "%d", b->s.max_order > 0 ? b->s.max_order : DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT);
     fputc('\n', o);
 }
 
@@ -919,7 +925,7 @@ int drape_cli_bench(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_SPACING, O_INTEG, O_RTOLS, O_ATOL_SCALE, O_LINSOL, O_TEND,
            O_SAMPLES, O_REPEAT, O_MAXWALL, O_REF, O_REFRTOL, O_REFMAXWALL, O_OUT, O_NAME,
-           O_KERNELS, O_SIZES };
+           O_KERNELS, O_SIZES, O_MAXORDER };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"spacing", required_argument, NULL, O_SPACING},
@@ -938,6 +944,7 @@ int drape_cli_bench(int argc, char **argv)
         {"name", required_argument, NULL, O_NAME},
         {"kernels", no_argument, NULL, O_KERNELS},
         {"sizes", required_argument, NULL, O_SIZES},
+        {"max-order", required_argument, NULL, O_MAXORDER},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -948,7 +955,7 @@ int drape_cli_bench(int argc, char **argv)
     double spacing = 0, t_end = 0, atol_scale = BENCH_DEFAULT_ATOL_SCALE;
     double max_wall = BENCH_DEFAULT_MAX_WALL, ref_max_wall = 0;
     double ref_rtol[2] = {BENCH_DEFAULT_REF_RTOL, BENCH_DEFAULT_REF_RTOL};
-    long samples = BENCH_DEFAULT_SAMPLES, repeat = BENCH_DEFAULT_REPEAT;
+    long samples = BENCH_DEFAULT_SAMPLES, repeat = BENCH_DEFAULT_REPEAT, max_order = 0;
     int linsol = 0, quiet = 0, kernels = 0, c;
     char *end;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
@@ -977,6 +984,12 @@ int drape_cli_bench(int argc, char **argv)
             samples = strtol(optarg, &end, 10);
             if (errno || *end || samples < 1 || samples > 10000)
                 return bench_usage_error("--samples: expected an integer in 1..10000, got `%s'", optarg);
+            break;
+        case O_MAXORDER:
+            errno = 0;
+            max_order = strtol(optarg, &end, 10);
+            if (errno || *end || end == optarg || max_order < 1 || max_order > 5)
+                return bench_usage_error("--max-order: expected an integer from 1 to 5, got `%s'", optarg);
             break;
         case O_REPEAT:
             errno = 0;
@@ -1081,6 +1094,7 @@ int drape_cli_bench(int argc, char **argv)
                                &err, drape_cli_warn, NULL) != 0) goto fail;
     if (fabric_path) snprintf(b.s.fabric_path, sizeof b.s.fabric_path, "%s", fabric_path);
     if (spacing > 0) b.s.spacing = spacing;
+    if (max_order > 0) b.s.max_order = (int)max_order;
     if (drape_fabric_load(b.s.fabric_path, &b.f, &err, drape_cli_warn, NULL) != 0) goto fail;
 
     if (kernels) {
@@ -1122,7 +1136,7 @@ int drape_cli_bench(int argc, char **argv)
     b.ref_max_wall = ref_max_wall;
     b.has_dc = b.s.kind == DRAPE_SCENE_CUSICK || b.s.kind == DRAPE_SCENE_TABLE;
     {
-        /* what `auto' resolves to for this model */
+        /* the default integrator's name (`auto', its own backend) */
         drape_integrator_opts io;
         drape_integrator_opts_default(&io);
         io.t_stop = b.t_end;

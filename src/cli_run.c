@@ -56,8 +56,9 @@ static const char run_usage[] =
     "end), mean_speed_m_s (largest particle speed averaged over the last\n"
     "equilibrium check interval: what the equilibrium test compares), the static\n"
     "solver's keys, linear_solver, lin_iters, lin_factors, integrator_switches\n"
-    "(auto: changes between cvode-bdf and arkode-erk); null where the scene\n"
-    "does not produce one).  status is equilibrium, t_max, failed or interrupted.\n"
+    "(auto: changes between cvode-bdf and arkode-erk), max_order (cvode-bdf,\n"
+    "auto); null where the scene does not produce one).  status is\n"
+    "equilibrium, t_max, failed or interrupted.\n"
     "\n"
     "Options (override the scene file):\n"
     "  --fabric FILE            fabric file instead of the scene's\n"
@@ -74,6 +75,10 @@ static const char run_usage[] =
     "                           the final state, no transient frames\n"
     "  --linear-solver NAME     auto (default), klu, schur or schur-direct\n"
     "                           (docs/integrators.md, \"Linear solvers\")\n"
+    "  --max-order N            highest BDF order of cvode-bdf (also inside auto),\n"
+    "                           1 to 5 (scene: solver.max_order, default 2); 1 is\n"
+    "                           backward Euler, which damps fast vibrations and is\n"
+    "                           the cheapest at loose tolerances\n"
     "  --max-steps N            give up (status failed) after N integrator steps\n"
     "                           between two output points (default 1000000)\n"
     "  --strain-limit X         stop (status failed) when a stretch edge's strain\n"
@@ -107,7 +112,7 @@ const char *const drape_cli_run_keys[] = {
     "area_nominal_m2", "area_mesh_m2", "max_speed_m_s", "method", "iterations",
     "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
     "max_force_rel", "linear_solver", "lin_iters", "lin_factors", "mean_speed_m_s",
-    "integrator_switches", NULL};
+    "integrator_switches", "max_order", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -342,6 +347,7 @@ typedef struct resume_info {
     char integrator[DRAPE_INTEGRATOR_NAME_MAX], form[32], linsol[32];
     double rtol, atol, spacing, t_max, strain_limit, below_since;
     long max_steps;
+    int max_order;   /* 0: the scene's (files written before --max-order) */
     int frames;      /* frames written before (OBJ and HDF5 numbering) */
     int had_h5;      /* the scene writes drape.h5 (else it is a checkpoint only) */
     drape_diag_ref ref;
@@ -440,6 +446,8 @@ static int resume_load(const char *dir, resume_info *ri, drape_error *err)
         return drape_error_set(err, DRAPE_E_IO, ri->h5_path, 0, 0, NULL,
                                "--resume: missing or invalid values in /run");
     ri->max_steps = (long)ms;
+    double mo = ck_num(c, "max_order");
+    ri->max_order = mo >= 1 && mo <= 5 ? (int)mo : 0;
     ri->frames = (int)fr;
     ri->had_h5 = h5 == 1;
     if (same_input(ri->scene_path, c->scene_yaml, "scene", ri->h5_path, err) != 0 ||
@@ -551,6 +559,7 @@ static void fill_run_kv(run_kv *k, const char *scene_path, const drape_scene *s,
     kv_num(k, "t_max_s", so->t_max);
     kv_num(k, "strain_limit", so->strain_limit);
     kv_num(k, "max_steps", (double)so->max_steps);
+    kv_num(k, "max_order", (double)so->max_order);
     kv_str(k, "linear_solver", drape_linsol_name(so->linsol));
     kv_num(k, "frames", frames);
     kv_num(k, "hdf5", s->out_hdf5 ? 1.0 : 0.0);
@@ -570,7 +579,7 @@ int drape_cli_run(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
-           O_STRAIN };
+           O_STRAIN, O_MAXORDER };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -581,6 +590,7 @@ int drape_cli_run(int argc, char **argv)
         {"t-max", required_argument, NULL, O_TMAX},
         {"out", required_argument, NULL, O_OUT},
         {"max-steps", required_argument, NULL, O_MAXSTEPS},
+        {"max-order", required_argument, NULL, O_MAXORDER},
         {"method", required_argument, NULL, O_METHOD},
         {"linear-solver", required_argument, NULL, O_LINSOL},
         {"strain-limit", required_argument, NULL, O_STRAIN},
@@ -593,7 +603,7 @@ int drape_cli_run(int argc, char **argv)
     const char *resume_dir = NULL, *run_opt = NULL;
     double rtol = 0, atol = 0, spacing = 0, t_max = 0, strain_limit = 0;
     int csv = 0, quiet = 0, c;
-    long max_steps = 0;
+    long max_steps = 0, max_order = 0;
     int method_static = 0, linsol = 0;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
         switch (c) {
@@ -638,6 +648,14 @@ int drape_cli_run(int argc, char **argv)
             max_steps = strtol(optarg, &end, 10);
             if (errno || *end || max_steps <= 0)
                 return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
+            break;
+        }
+        case O_MAXORDER: {
+            char *end;
+            errno = 0;
+            max_order = strtol(optarg, &end, 10);
+            if (errno || *end || end == optarg || max_order < 1 || max_order > 5)
+                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'%s", optarg, "");
             break;
         }
         case O_FORMAT:
@@ -709,6 +727,7 @@ int drape_cli_run(int argc, char **argv)
         strain_limit = ri->strain_limit;
         form = ri->form;
         max_steps = ri->max_steps;
+        max_order = ri->max_order;
         if (drape_linsol_parse(ri->linsol, &linsol) != 0) linsol = 0;
         out_dir = resume_dir;
     }
@@ -723,6 +742,7 @@ int drape_cli_run(int argc, char **argv)
     if (spacing > 0) s.spacing = spacing;
     if (t_max > 0) s.t_max = t_max;
     if (strain_limit > 0) s.strain_limit = strain_limit;
+    if (max_order > 0) s.max_order = (int)max_order;
     if (form) s.energy_form = strcmp(form, "seed") == 0 ? DRAPE_FORM_SEED : DRAPE_FORM_CONSISTENT;
 
     if (drape_fabric_load(s.fabric_path, &f, &err, resume_dir ? NULL : drape_cli_warn, NULL) != 0)
@@ -883,6 +903,14 @@ int drape_cli_run(int argc, char **argv)
     add_num(&r, "mean_speed_m_s", method_static ? NAN : res.check_speed);
     /* auto only (-1, null, for the others): changes between cvode-bdf and arkode-erk */
     add_int(&r, "integrator_switches", res.stats.switches);
+    /* cvode-bdf's highest order (alone or inside auto); null for the others */
+    {
+        const char *used = res.integrator[0] ? res.integrator : s.integrator;
+        int bdf = !method_static && (strcmp(used, "cvode-bdf") == 0 || strcmp(used, "auto") == 0);
+        add_int(&r, "max_order", bdf ? (s.max_order > 0 ? s.max_order
+                                                        : DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT)
+                                     : NAN);
+    }
     if (!fields_match_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -28,7 +28,7 @@ static const char *const columns[] = {
     "wall_s", "cpu_s", "repeats", "steps", "rhs_evals", "jac_evals", "lin_setups",
     "lin_factors", "nonlin_iters", "err_test_fails", "conv_fails", "err_pos_rel",
     "err_pos_rms_rel", "err_final_rel", "err_final_v_rel", "dc", "dc_ref", "err_dc",
-    "nodes", "message", NULL};
+    "nodes", "message", "max_order", NULL};
 
 typedef struct table {
     int nrow, ncol;
@@ -142,6 +142,9 @@ START_TEST(test_hang_convergence)
         ck_assert(num(&tab, r, "err_final_rel") <= num(&tab, r, "err_pos_rel"));
         ck_assert(num(&tab, r, "err_pos_rms_rel") <= num(&tab, r, "err_pos_rel"));
         ck_assert_str_eq(cell(&tab, r, "dc"), ""); /* a hang scene has no DC */
+        /* the BDF order column: cvode-bdf's default, empty for the others */
+        ck_assert_str_eq(cell(&tab, r, "max_order"),
+                         strcmp(cell(&tab, r, "integrator"), "cvode-bdf") == 0 ? "2" : "");
         if (r >= 2) {
             ck_assert(num(&tab, r, "err_pos_rel") > 0);
             if (num(&tab, r, "err_pos_rel") < worst_sweep) worst_sweep = num(&tab, r, "err_pos_rel");
@@ -167,6 +170,32 @@ START_TEST(test_hang_convergence)
                           "%s %s: %g at 1e-6 vs %g at 1e-4", cell(&tab, loose, "integrator"),
                           e[k], num(&tab, tight, e[k]), num(&tab, loose, e[k]));
     }
+}
+END_TEST
+
+/* --max-order 1 (backward Euler) reaches cvode-bdf: the column says 1, and
+ * the error still falls with the tolerance, but as a first-order method's
+ * does (error ~ rtol^(1/2): 10x for a 100x tighter rtol; at least 3x is
+ * asserted, as for the default order above). */
+START_TEST(test_max_order_bdf1)
+{
+    int st = tu_run_drape("bench " HANG " --integrators cvode-bdf --rtols 1e-3,1e-5 --max-order 1",
+                          out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "status %d: %s", st, err);
+    parse(&tab, out);
+    check_header(&tab);
+    ck_assert_int_eq(tab.nrow, 2 + 2);
+    ck_assert_str_eq(cell(&tab, 0, "max_order"), ""); /* the reference is arkode-erk */
+    for (int r = 2; r < 4; r++) {
+        ck_assert_str_eq(cell(&tab, r, "status"), "ok");
+        ck_assert_str_eq(cell(&tab, r, "integrator"), "cvode-bdf");
+        ck_assert_str_eq(cell(&tab, r, "max_order"), "1");
+    }
+    double loose = num(&tab, 2, "err_pos_rel"), tight = num(&tab, 3, "err_pos_rel");
+    ck_assert_msg(tight > 0 && tight < loose / 3, "BDF1: error %g at 1e-5, %g at 1e-3", tight,
+                  loose);
+    ck_assert_int_eq(tu_run_drape("bench " HANG " --max-order 0", out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "--max-order"), "%s", err);
 }
 END_TEST
 
@@ -274,6 +303,7 @@ Suite *bench_suite(void)
     TCase *tc = tcase_create("bench");
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, test_hang_convergence);
+    tcase_add_test(tc, test_max_order_bdf1);
     tcase_add_test(tc, test_cusick_dc);
     tcase_add_test(tc, test_timeout_skips);
     tcase_add_test(tc, test_out_dir);

@@ -562,6 +562,50 @@ START_TEST(test_interrupt_and_resume)
 }
 END_TEST
 
+/* --max-order reaches cvode-bdf and is reported (null for the integrators
+ * that have no BDF order); bad values are usage errors; an interrupted run
+ * resumes with the order it was started with.  BDF1 and BDF2 take
+ * different steps on the same scene. */
+START_TEST(test_max_order)
+{
+    char args[512];
+    snprintf(args, sizeof args, "%s --integrator cvode-bdf --max-order 1", small_hang);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    ck_assert_double_eq(json_num(out, "max_order"), 1.0);
+    double steps1 = json_num(out, "steps");
+    snprintf(args, sizeof args, "%s --integrator cvode-bdf", small_hang);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    ck_assert_double_eq(json_num(out, "max_order"), 2.0); /* the default */
+    double steps2 = json_num(out, "steps");
+    ck_assert_msg(steps1 > 0 && steps2 > 0 && steps1 != steps2, "steps %g (BDF1) and %g (BDF2)",
+                  steps1, steps2);
+    snprintf(args, sizeof args, "%s --integrator arkode-erk --max-order 1", small_hang);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    ck_assert_msg(strstr(out, "\"max_order\": null"), "%s", out);
+    static const char *bad[] = {"0", "6", "2x", ""};
+    for (int i = 0; i < 4; i++) {
+        snprintf(args, sizeof args, "%s --max-order '%s'", small_hang, bad[i]);
+        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+        ck_assert_msg(strstr(err, "--max-order"), "%s", err);
+    }
+    /* interrupted with --max-order 1, resumed: still BDF1 */
+    const char *scene = ir_scene();
+    char dir[600], wait_for[700];
+    snprintf(dir, sizeof dir, "%s/interrupted-bdf1", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/frame_000000.obj", dir);
+    const char *a1[] = {"run", "-q", scene, "--max-order", "1", "--out", dir, NULL};
+    int code = run_and_signal(wait_for, SIGINT, a1);
+    ck_assert_msg(code == 130, "exit %d (want 130), stderr: %s", code, err);
+    ck_assert_double_eq(json_num(out, "max_order"), 1.0);
+    char resume[700];
+    snprintf(resume, sizeof resume, "run --resume '%s'", dir);
+    code = tu_run_drape(resume, out, CAP, err, CAP);
+    ck_assert_msg(code == 0, "exit %d, stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"t_max\""), "%s", out);
+    ck_assert_double_eq(json_num(out, "max_order"), 1.0);
+}
+END_TEST
+
 /* --resume refuses what it cannot continue, with the documented statuses. */
 START_TEST(test_resume_refusals)
 {
@@ -691,6 +735,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_imex_limp_fold);
     tcase_add_test(tc, test_interrupt_and_resume);
     tcase_add_test(tc, test_resume_refusals);
+    tcase_add_test(tc, test_max_order);
     tcase_add_test(tc, test_strain_limit_stops_run);
     tcase_add_test(tc, test_bad_corpus_run);
     suite_add_tcase(s, tc);
