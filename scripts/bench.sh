@@ -63,14 +63,16 @@ mkdir -p "$OUT"
 load1() { cut -d' ' -f1 /proc/loadavg; }
 
 # record NAME ARGS ELAPSED LOAD_BEFORE LOAD_AFTER: one row of runs.csv per
-# name (replaced when the name runs again)
+# name (replaced when the name runs again), with the drape commit, CFLAGS
+# and date of that run (a partial run leaves the other rows' as they were)
 record() {
-    python3 - "$OUT/runs.csv" "$@" <<'PY'
+    python3 - "$OUT/runs.csv" "$@" "$COMMIT" "$CFLAGS_USED" "$(date -u +%F)" <<'PY'
 import csv, os, sys
-path, name, args, el, lb, la = sys.argv[1:7]
-cols = ["name", "args", "elapsed_s", "load_before", "load_after"]
-rows = list(csv.DictReader(open(path))) if os.path.exists(path) else []
-new = {"name": name, "args": args, "elapsed_s": el, "load_before": lb, "load_after": la}
+path, name, args, el, lb, la, commit, cflags, date = sys.argv[1:10]
+cols = ["name", "args", "elapsed_s", "load_before", "load_after", "commit", "cflags", "date"]
+rows = list(csv.DictReader(open(path), restval="")) if os.path.exists(path) else []
+new = {"name": name, "args": args, "elapsed_s": el, "load_before": lb, "load_after": la,
+       "commit": commit, "cflags": cflags, "date": date}
 rows = [new if r["name"] == name else r for r in rows]
 if not any(r["name"] == name for r in rows):
     rows.append(new)
@@ -97,15 +99,17 @@ bench() {
     record "$name" "$*" "$(( $(date +%s) - t0 ))" "$lb" "$(load1)"
 }
 
+COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+[ -n "$(git status --porcelain -- src include 2>/dev/null)" ] && COMMIT="$COMMIT + uncommitted changes"
+CFLAGS_USED=${CFLAGS:--O3 -g}
+
 machine() {
     cpu=$(sed -n 's/^model name[^:]*: //p' /proc/cpuinfo | head -1)
     mem=$(awk '/MemTotal/ {printf "%.0f GiB", $2 / 1048576}' /proc/meminfo)
     os=$(. /etc/os-release 2>/dev/null && echo "$PRETTY_NAME")
-    commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
-    [ -n "$(git status --porcelain -- src include 2>/dev/null)" ] && commit="$commit + uncommitted changes"
     {
         echo "cpu=$cpu"; echo "cores=$(nproc)"; echo "mem=$mem"; echo "os=$os"
-        echo "commit=$commit"; echo "cflags=${CFLAGS:--O3 -g}"; echo "date=$(date -u +%F)"
+        echo "commit=$COMMIT"; echo "cflags=$CFLAGS_USED"; echo "date=$(date -u +%F)"
     } > "$OUT/machine.txt"
 }
 

@@ -271,17 +271,20 @@ def machine_block():
                 k, v = line.rstrip("\n").split("=", 1)
                 info[k] = v
     L.append(f"Machine: {info.get('cpu', 'unknown')}, {info.get('cores', '?')} cores, "
-             f"{info.get('mem', '?')} memory, {info.get('os', '')}; drape {info.get('commit', '?')}, "
-             f"built with `{info.get('cflags', '?')}`; generated {info.get('date', '?')}. "
+             f"{info.get('mem', '?')} memory, {info.get('os', '')}; last run: drape "
+             f"{info.get('commit', '?')}, built with `{info.get('cflags', '?')}`, "
+             f"{info.get('date', '?')} (each row below says which build made it). "
              f"Times in the tables and plots: `{TIME}` (BENCH_TIME).")
     L.append("")
     p = os.path.join(OUT, "runs.csv")
     if os.path.exists(p):
-        L.append("| name | command (after `drape bench`) | elapsed s | load before | load after |")
-        L.append("|---|---|---|---|---|")
+        L.append("| name | command (after `drape bench`) | drape | built with | date | elapsed s | "
+                 "load before | load after |")
+        L.append("|---|---|---|---|---|---|---|---|")
         for r in rows_of(p):
-            L.append(f"| {r['name']} | `{r['args']}` | {r['elapsed_s']} | {r['load_before']} | "
-                     f"{r['load_after']} |")
+            L.append(f"| {r['name']} | `{r['args']}` | {r.get('commit') or '?'} | "
+                     f"`{r.get('cflags') or '?'}` | {r.get('date') or '?'} | {r['elapsed_s']} | "
+                     f"{r['load_before']} | {r['load_after']} |")
         L.append("")
     return L
 
