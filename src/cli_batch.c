@@ -51,8 +51,8 @@ static const char batch_usage[] =
     "Passed on to every run (see `drape run --help`):\n"
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
     "  --t-max T, --max-steps N, --strain-limit X, --method dynamic|static,\n"
-    "  --linear-solver NAME (--method static: each fabric's certified\n"
-    "  equilibrium in about a second; docs/equilibrium.md)\n"
+    "  --linear-solver NAME, --max-order N (--method static: each fabric's\n"
+    "  certified equilibrium in about a second; docs/equilibrium.md)\n"
     "\n"
     "Progress goes to stderr only when it is a terminal.  The first interrupt\n"
     "(Ctrl-C) stops launching runs and waits for the running ones; a second\n"
@@ -564,7 +564,8 @@ static void make_name(batch *b, int k)
 int drape_cli_batch(int argc, char **argv)
 {
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
-           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL };
+           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
+           O_MAXORDER };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -580,6 +581,7 @@ int drape_cli_batch(int argc, char **argv)
         {"strain-limit", required_argument, NULL, O_STRAIN},
         {"method", required_argument, NULL, O_METHOD},
         {"linear-solver", required_argument, NULL, O_LINSOL},
+        {"max-order", required_argument, NULL, O_MAXORDER},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -659,6 +661,15 @@ int drape_cli_batch(int argc, char **argv)
             if (errno || *end || end == optarg || v <= 0)
                 return usage_error("--max-steps: expected a positive integer, got `%s'", optarg);
             name = "--max-steps";
+            break;
+        }
+        case O_MAXORDER: {
+            char *end;
+            errno = 0;
+            long v = strtol(optarg, &end, 10);
+            if (errno || *end || end == optarg || v < 1 || v > 5)
+                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'", optarg);
+            name = "--max-order";
             break;
         }
         case 'q': quiet = 1; break;

@@ -283,6 +283,30 @@ START_TEST(test_method_passed_on)
 }
 END_TEST
 
+/* --max-order reaches the runs: the result row says BDF1 (the scene's
+ * integrator is cvode-bdf); a bad value is a usage error. */
+START_TEST(test_max_order_passed_on)
+{
+    const char *d = subdir("bdf1");
+    char args[4096];
+    snprintf(args, sizeof args,
+             "batch -q ../scenes/hang.yaml %s --spacing 10cm --t-max 0.05s --max-order 1 --out %s",
+             COTTON, d);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(d, t);
+    ck_assert_int_eq(t->nrow, 1);
+    ck_assert_str_eq(cell(t, 0, "integrator"), "cvode-bdf");
+    ck_assert_str_eq(cell(t, 0, "max_order"), "1");
+    free(t);
+    snprintf(args, sizeof args, "batch -q ../scenes/hang.yaml %s --max-order 7 --out %s", COTTON,
+             subdir("bdf7"));
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "--max-order"), "%s", err);
+}
+END_TEST
+
 START_TEST(test_resume)
 {
     const char *dir = subdir("resume");
@@ -592,6 +616,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_rows_and_errors);
     tcase_add_test(tc, test_parallel_same_rows);
     tcase_add_test(tc, test_method_passed_on);
+    tcase_add_test(tc, test_max_order_passed_on);
     tcase_add_test(tc, test_resume);
     tcase_add_test(tc, test_failed_run);
     tcase_add_test(tc, test_usage);
