@@ -664,10 +664,8 @@ int drape_cli_batch(int argc, char **argv)
             break;
         }
         case O_MAXORDER: {
-            char *end;
-            errno = 0;
-            long v = strtol(optarg, &end, 10);
-            if (errno || *end || end == optarg || v < 1 || v > 5)
+            int v;
+            if (drape_max_order_parse(optarg, &v) != 0)
                 return usage_error("--max-order: expected an integer from 1 to 5, got `%s'", optarg);
             name = "--max-order";
             break;

@@ -620,8 +620,8 @@ static void write_row(FILE *o, const bench *b, const bench_point *p)
     fputc(',', o);
     drape_cli_csv_put(o, p->msg);
     fputc(',', o);
-    if (strcmp(p->integrator, "cvode-bdf") == 0 || strcmp(p->integrator, "auto") == 0)
-        fprintf(o, "%d", b->s.max_order > 0 ? b->s.max_order : DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT);
+    int bdf = drape_integrator_bdf_order(p->integrator, b->s.max_order);
+    if (bdf > 0) fprintf(o, "%d", bdf);
     fputc('\n', o);
 }
 
@@ -955,7 +955,8 @@ int drape_cli_bench(int argc, char **argv)
     double spacing = 0, t_end = 0, atol_scale = BENCH_DEFAULT_ATOL_SCALE;
     double max_wall = BENCH_DEFAULT_MAX_WALL, ref_max_wall = 0;
     double ref_rtol[2] = {BENCH_DEFAULT_REF_RTOL, BENCH_DEFAULT_REF_RTOL};
-    long samples = BENCH_DEFAULT_SAMPLES, repeat = BENCH_DEFAULT_REPEAT, max_order = 0;
+    long samples = BENCH_DEFAULT_SAMPLES, repeat = BENCH_DEFAULT_REPEAT;
+    int max_order = 0;
     int linsol = 0, quiet = 0, kernels = 0, c;
     char *end;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
@@ -986,9 +987,7 @@ int drape_cli_bench(int argc, char **argv)
                 return bench_usage_error("--samples: expected an integer in 1..10000, got `%s'", optarg);
             break;
         case O_MAXORDER:
-            errno = 0;
-            max_order = strtol(optarg, &end, 10);
-            if (errno || *end || end == optarg || max_order < 1 || max_order > 5)
+            if (drape_max_order_parse(optarg, &max_order) != 0)
                 return bench_usage_error("--max-order: expected an integer from 1 to 5, got `%s'", optarg);
             break;
         case O_REPEAT:
@@ -1094,7 +1093,7 @@ int drape_cli_bench(int argc, char **argv)
                                &err, drape_cli_warn, NULL) != 0) goto fail;
     if (fabric_path) snprintf(b.s.fabric_path, sizeof b.s.fabric_path, "%s", fabric_path);
     if (spacing > 0) b.s.spacing = spacing;
-    if (max_order > 0) b.s.max_order = (int)max_order;
+    if (max_order > 0) b.s.max_order = max_order;
     if (drape_fabric_load(b.s.fabric_path, &b.f, &err, drape_cli_warn, NULL) != 0) goto fail;
 
     if (kernels) {

@@ -603,7 +603,8 @@ int drape_cli_run(int argc, char **argv)
     const char *resume_dir = NULL, *run_opt = NULL;
     double rtol = 0, atol = 0, spacing = 0, t_max = 0, strain_limit = 0;
     int csv = 0, quiet = 0, c;
-    long max_steps = 0, max_order = 0;
+    long max_steps = 0;
+    int max_order = 0;
     int method_static = 0, linsol = 0;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
         switch (c) {
@@ -650,14 +651,10 @@ int drape_cli_run(int argc, char **argv)
                 return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
             break;
         }
-        case O_MAXORDER: {
-            char *end;
-            errno = 0;
-            max_order = strtol(optarg, &end, 10);
-            if (errno || *end || end == optarg || max_order < 1 || max_order > 5)
+        case O_MAXORDER:
+            if (drape_max_order_parse(optarg, &max_order) != 0)
                 return usage_error("--max-order: expected an integer from 1 to 5, got `%s'%s", optarg, "");
             break;
-        }
         case O_FORMAT:
             if (strcmp(optarg, "json") == 0) csv = 0;
             else if (strcmp(optarg, "csv") == 0) csv = 1;
@@ -742,7 +739,7 @@ int drape_cli_run(int argc, char **argv)
     if (spacing > 0) s.spacing = spacing;
     if (t_max > 0) s.t_max = t_max;
     if (strain_limit > 0) s.strain_limit = strain_limit;
-    if (max_order > 0) s.max_order = (int)max_order;
+    if (max_order > 0) s.max_order = max_order;
     if (form) s.energy_form = strcmp(form, "seed") == 0 ? DRAPE_FORM_SEED : DRAPE_FORM_CONSISTENT;
 
     if (drape_fabric_load(s.fabric_path, &f, &err, resume_dir ? NULL : drape_cli_warn, NULL) != 0)
@@ -905,11 +902,11 @@ int drape_cli_run(int argc, char **argv)
     add_int(&r, "integrator_switches", res.stats.switches);
     /* cvode-bdf's highest order (alone or inside auto); null for the others */
     {
-        const char *used = res.integrator[0] ? res.integrator : s.integrator;
-        int bdf = !method_static && (strcmp(used, "cvode-bdf") == 0 || strcmp(used, "auto") == 0);
-        add_int(&r, "max_order", bdf ? (s.max_order > 0 ? s.max_order
-                                                        : DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT)
-                                     : NAN);
+        int bdf = method_static ? 0
+                                : drape_integrator_bdf_order(res.integrator[0] ? res.integrator
+                                                                               : s.integrator,
+                                                             s.max_order);
+        add_int(&r, "max_order", bdf > 0 ? bdf : NAN);
     }
     if (!fields_match_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,

@@ -11,8 +11,10 @@
  */
 #include "drape/integrator.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "drape/alloc.h"
@@ -41,6 +43,22 @@ void drape_integrator_opts_default(drape_integrator_opts *o)
     memset(o, 0, sizeof *o);
     o->rtol = 1e-4;
     o->atol = 1e-7;
+}
+
+int drape_max_order_parse(const char *text, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(text, &end, 10);
+    if (errno || *end || end == text || v < 1 || v > 5) return -1;
+    *out = (int)v;
+    return 0;
+}
+
+int drape_integrator_bdf_order(const char *name, int max_order)
+{
+    if (strcmp(name, "cvode-bdf") != 0 && strcmp(name, "auto") != 0) return 0;
+    return max_order > 0 ? max_order : DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT;
 }
 
 const drape_integrator_type *drape_integrator_type_find(const char *name)

@@ -143,27 +143,6 @@ typedef struct angle_geo {
  * computed: GEO_ANGLE the angle (one atan2), GEO_HESS the unit vectors ua,
  * ub of the Hessian (the force path needs neither). */
 enum { GEO_ANGLE = 1, GEO_HESS = 2 };
-static void angle_geo_finish(unsigned need, angle_geo *G);
-
-/* Fill G for the edges of segment refs ra, rb (the segment cache of the
- * current evaluation; the same operations as measuring a and b afresh, so
- * the same bits).  Returns 1 if either segment is degenerate, else 0. */
-static int angle_geo_set(const drape_model *m, int ra, int rb, unsigned need,
-                         angle_geo *G)
-{
-    int sa = ra >> 1, sb = rb >> 1;
-    if (m->seg_bad[sa] || m->seg_bad[sb]) return 1;
-    double fa = (ra & 1) ? -1.0 : 1.0, fb = (rb & 1) ? -1.0 : 1.0;
-    const double *ua = m->seg_u + 3 * (int64_t)sa, *ub = m->seg_u + 3 * (int64_t)sb;
-    G->la = m->seg_l[sa];
-    G->lb = m->seg_l[sb];
-    for (int k = 0; k < 3; k++) {
-        G->ah[k] = fa * ua[k];  /* exact: a sign change */
-        G->bh[k] = fb * ub[k];
-    }
-    angle_geo_finish(need, G);
-    return 0;
-}
 
 /* The rest of G from the unit edges ah, bh. */
 static void angle_geo_finish(unsigned need, angle_geo *G)
@@ -187,6 +166,26 @@ static void angle_geo_finish(unsigned need, angle_geo *G)
     h = sqrt(G->s * G->s + G->c * G->c);
     G->sn = G->s / h;
     G->cn = G->c / h;
+}
+
+/* Fill G for the edges of segment refs ra, rb (the segment cache of the
+ * current evaluation; the same operations as measuring a and b afresh, so
+ * the same bits).  Returns 1 if either segment is degenerate, else 0. */
+static int angle_geo_set(const drape_model *m, int ra, int rb, unsigned need,
+                         angle_geo *G)
+{
+    int sa = ra >> 1, sb = rb >> 1;
+    if (m->seg_bad[sa] || m->seg_bad[sb]) return 1;
+    double fa = (ra & 1) ? -1.0 : 1.0, fb = (rb & 1) ? -1.0 : 1.0;
+    const double *ua = m->seg_u + 3 * (int64_t)sa, *ub = m->seg_u + 3 * (int64_t)sb;
+    G->la = m->seg_l[sa];
+    G->lb = m->seg_l[sb];
+    for (int k = 0; k < 3; k++) {
+        G->ah[k] = fa * ua[k];  /* exact: a sign change */
+        G->bh[k] = fb * ub[k];
+    }
+    angle_geo_finish(need, G);
+    return 0;
 }
 
 /* Gradient of g(angle) with respect to a and b, given r = g'/sin. */

@@ -100,6 +100,13 @@ int drape_linsol_parse(const char *name, int *out);
 /* Name of a drape_linsol value (as parsed above), "none" otherwise. */
 const char *drape_linsol_name(int linsol);
 
+/* A command line's maximum BDF order, "1" to "5" -> *out; 0, or -1. */
+int drape_max_order_parse(const char *text, int *out);
+/* The highest BDF order integrator `name` runs with when asked for
+ * max_order (0 = not set): cvode-bdf and auto use max_order or
+ * DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT; 0 for integrators without one. */
+int drape_integrator_bdf_order(const char *name, int max_order);
+
 /* Fill o with the defaults: rtol 1e-4, atol 1e-7 m, everything else 0
  * (= the documented default). */
 void drape_integrator_opts_default(drape_integrator_opts *o);
