@@ -125,7 +125,7 @@ static const char bench_usage[] =
     "and auto).  Empty = not available.\n"
     "--kernels columns: side, particles, free_particles, nnz_K, rhs_ms, jac_ms\n"
     "(K and D), jac_first_order_ms, schur_factor_ms, rhs_us_per_free,\n"
-    "jac_us_per_free.\n"
+    "jac_us_per_free, schur_solve_ms (one solve with that factor).\n"
     "\n"
     "Exit status: 0 done (failed or timed-out points are data, not errors),\n"
     "1 invalid input, 2 bad command line, 3 I/O error, 4 the reference run\n"
@@ -143,7 +143,7 @@ static const char *const bench_columns[] = {
 static const char *const kernel_columns[] = {
     "side", "particles", "free_particles", "nnz_K", "rhs_ms", "jac_ms",
     "jac_first_order_ms", "schur_factor_ms", "rhs_us_per_free", "jac_us_per_free",
-    NULL};
+    "schur_solve_ms", NULL};
 
 typedef enum pt_status { PT_OK, PT_FAILED, PT_TIMEOUT, PT_SKIPPED } pt_status;
 
@@ -771,13 +771,15 @@ static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, i
 
 /* ---- kernels ------------------------------------------------------------------------ */
 
-enum { K_RHS, K_JAC, K_JAC1, K_SCHUR };
+enum { K_RHS, K_JAC, K_JAC1, K_SCHUR, K_SOLVE, K_COUNT };
 
 typedef struct kernel_ctx {
     drape_model *m;
     const double *x, *v;
     double *f, *K, *D, *J;
     drape_schur *schur;
+    const double *r; /* 6 nf: right-hand side of the Newton system */
+    double *z;       /* 6 nf: its solution */
 } kernel_ctx;
 
 static int kernel_call(kernel_ctx *c, int which, drape_error *err)
@@ -787,7 +789,8 @@ static int kernel_call(kernel_ctx *c, int which, drape_error *err)
     case K_JAC: return drape_model_jacobian(c->m, DRAPE_PART_ALL, c->x, c->v, c->K, c->D);
     case K_JAC1:
         return drape_model_jacobian_first_order(c->m, DRAPE_PART_ALL, 1, c->x, c->v, c->J);
-    default: return drape_schur_factor(c->schur, c->K, c->D, BENCH_KERNEL_GAMMA, err);
+    case K_SCHUR: return drape_schur_factor(c->schur, c->K, c->D, BENCH_KERNEL_GAMMA, err);
+    default: return drape_schur_solve(c->schur, c->K, BENCH_KERNEL_GAMMA, c->r, c->z);
     }
 }
 
@@ -818,6 +821,7 @@ static int kernels_one(const drape_scene *s0, const drape_fabric *f, int side, F
     drape_model *m = NULL;
     drape_schur *schur = NULL;
     double *x = NULL, *v = NULL, *fv = NULL, *K = NULL, *D = NULL, *J = NULL, *im = NULL;
+    double *r = NULL, *z = NULL;
     int rc = -1;
     s.shape = DRAPE_SHAPE_RECTANGLE;
     s.width = s.height = (side - 1) * s.spacing;
@@ -838,7 +842,10 @@ static int kernels_one(const drape_scene *s0, const drape_fabric *f, int side, F
     D = drape_malloc(sizeof(double) * (size_t)(P->nnz ? P->nnz : 1));
     J = drape_malloc(sizeof(double) * (size_t)(P1->nnz ? P1->nnz : 1));
     im = drape_malloc(sizeof(double) * (size_t)(L->n_free ? L->n_free : 1));
-    if (!x || !v || !fv || !K || !D || !J || !im) {
+    size_t n6 = 6 * (size_t)(L->n_free ? L->n_free : 1);
+    r = drape_malloc(sizeof(double) * n6);
+    z = drape_malloc(sizeof(double) * n6);
+    if (!x || !v || !fv || !K || !D || !J || !im || !r || !z) {
         drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
         goto out;
     }
@@ -855,11 +862,12 @@ static int kernels_one(const drape_scene *s0, const drape_fabric *f, int side, F
         v[3 * i + 2] = 1e-2 * w;
         if (L->free_id[i] >= 0) im[L->free_id[i]] = 1.0 / L->mass[i];
     }
+    for (size_t k = 0; k < n6; k++) r[k] = 1e-6 * sin(0.7 * (double)k + 0.2);
     schur = drape_schur_new(P, im, err);
     if (!schur) goto out;
-    kernel_ctx c = {m, x, v, fv, K, D, J, schur};
-    double t[4];
-    for (int k = 0; k < 4; k++) {
+    kernel_ctx c = {m, x, v, fv, K, D, J, schur, r, z};
+    double t[K_COUNT];
+    for (int k = 0; k < K_COUNT; k++) {
         if (k == K_SCHUR && kernel_call(&c, K_JAC, err) != 0) {
             drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL, "Jacobian failed");
             goto out;
@@ -871,12 +879,13 @@ static int kernels_one(const drape_scene *s0, const drape_fabric *f, int side, F
             goto out;
         }
     }
-    fprintf(o, "%d,%d,%d,%ld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", side, L->n, L->n_free,
+    fprintf(o, "%d,%d,%d,%ld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", side, L->n, L->n_free,
             (long)P->nnz, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_JAC1], 1e3 * t[K_SCHUR],
-            1e6 * t[K_RHS] / L->n_free, 1e6 * t[K_JAC] / L->n_free);
+            1e6 * t[K_RHS] / L->n_free, 1e6 * t[K_JAC] / L->n_free, 1e3 * t[K_SOLVE]);
     if (progress_on)
-        fprintf(stderr, "drape: bench kernels %d x %d: rhs %.3g ms, jac %.3g ms, schur %.3g ms\n",
-                side, side, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_SCHUR]);
+        fprintf(stderr, "drape: bench kernels %d x %d: rhs %.3g ms, jac %.3g ms, schur %.3g ms, "
+                "solve %.3g ms\n", side, side, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_SCHUR],
+                1e3 * t[K_SOLVE]);
     rc = 0;
 out:
     drape_schur_free(schur);
@@ -887,6 +896,8 @@ out:
     drape_free(D);
     drape_free(J);
     drape_free(im);
+    drape_free(r);
+    drape_free(z);
     drape_model_free(m);
     drape_lattice_free(L);
     return rc;

@@ -52,6 +52,23 @@
  * estimate) a factorisation is treated as failed. */
 #define SCHUR_RCOND_MIN 1e-14
 
+/* Supernode amalgamation (cholmod_common nrelax[]; zrelax[] stays at
+ * CHOLMOD's 0.8, 0.1, 0.05).  CHOLMOD merges a child supernode into its
+ * parent when the merged one has at most nrelax[0] columns, or at most
+ * nrelax[1] (nrelax[2]) columns and at most zrelax[1] (zrelax[2]) of its
+ * entries are explicit zeros.  CHOLMOD's 4, 16, 48 leave the lattice's
+ * Schur matrix in many small supernodes, and each costs a BLAS call and an
+ * OpenMP region (a futex system call in libgomp even when one thread
+ * runs).  Measured with `drape bench --kernels` (schur_factor_ms, three
+ * interleaved runs, one thread, same machine): 31 x 31 5.7-6.2 ms ->
+ * 3.9-4.6 ms, 100 x 100 113-118 -> 97-103 ms, 200 x 200 953-961 ->
+ * 889-917 ms, with the solve unchanged within noise (0.25-0.26 ms at
+ * 31 x 31); 32, 128, 512 was slower than this at both sizes
+ * (docs/performance.md, "Fewer supernodes"). */
+#define SCHUR_NRELAX_0 16
+#define SCHUR_NRELAX_1 64
+#define SCHUR_NRELAX_2 256
+
 /* Threads.  Debian's CHOLMOD runs OpenMP regions with a fixed
  * num_threads(4) clause and calls the pthread OpenBLAS; on this project's
  * problem sizes both cost more than they gain (Cusick-size supernodes are
@@ -220,6 +237,9 @@ drape_schur *drape_schur_new(const drape_pattern *P, const double *inv_mass,
     s->c.print = 0;                      /* library code never prints */
     s->c.quick_return_if_not_posdef = 1; /* a failed LL^T costs less */
     s->c.final_ll = 0;                   /* simplicial stays LDL^T */
+    s->c.nrelax[0] = SCHUR_NRELAX_0;
+    s->c.nrelax[1] = SCHUR_NRELAX_1;
+    s->c.nrelax[2] = SCHUR_NRELAX_2;
     s->A = cholmod_l_allocate_sparse((size_t)n, (size_t)n, (size_t)s->nl, 1, 1, -1,
                                      CHOLMOD_REAL, &s->c);
     s->B = cholmod_l_allocate_dense((size_t)n, 1, (size_t)n, CHOLMOD_REAL, &s->c);

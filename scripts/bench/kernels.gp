@@ -22,6 +22,7 @@ do for [fmt in "png svg"] {
     plot csv using (column("free_particles")):(column("rhs_ms")) with linespoints pt 7 title "right-hand side (forces)", \
          csv using (column("free_particles")):(column("jac_ms")) with linespoints pt 5 title "K and D", \
          csv using (column("free_particles")):(column("jac_first_order_ms")) with linespoints pt 9 title "first-order J", \
-         csv using (column("free_particles")):(column("schur_factor_ms")) with linespoints pt 11 title "CHOLMOD factor of S"
+         csv using (column("free_particles")):(column("schur_factor_ms")) with linespoints pt 11 title "CHOLMOD factor of S", \
+         csv using (column("free_particles")):(column("schur_solve_ms")) with linespoints pt 13 title "CHOLMOD solve with S"
     unset output
 }

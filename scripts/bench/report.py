@@ -233,14 +233,16 @@ def scene_block(name, rows):
 def kernels_block(rows):
     L = []
     hdr = ["side", "particles", "free", "nnz(K)", "RHS ms", "K, D ms", "first-order J ms",
-           "CHOLMOD factor of S ms", "RHS us / free particle", "K, D us / free particle"]
+           "CHOLMOD factor of S ms", "RHS us / free particle", "K, D us / free particle",
+           "CHOLMOD solve ms"]
     L.append("| " + " | ".join(hdr) + " |")
     L.append("|" + "---|" * len(hdr))
     for r in rows:
         L.append("| " + " | ".join([r["side"], r["particles"], r["free_particles"], r["nnz_K"],
                                     g(r["rhs_ms"]), g(r["jac_ms"]), g(r["jac_first_order_ms"]),
                                     g(r["schur_factor_ms"]), g(r["rhs_us_per_free"]),
-                                    g(r["jac_us_per_free"])]) + " |")
+                                    g(r["jac_us_per_free"]), g(r.get("schur_solve_ms") or "")])
+                 + " |")
     L.append("")
     big = [r for r in rows if num(r["free_particles"]) and num(r["free_particles"]) >= 1000]
     if len(big) >= 2:
@@ -248,8 +250,8 @@ def kernels_block(rows):
         na, nb = num(a["free_particles"]), num(b["free_particles"])
         parts = []
         for col, label in [("rhs_ms", "RHS"), ("jac_ms", "K, D"), ("jac_first_order_ms", "first-order J"),
-                           ("schur_factor_ms", "CHOLMOD factor")]:
-            ta, tb = num(a[col]), num(b[col])
+                           ("schur_factor_ms", "CHOLMOD factor"), ("schur_solve_ms", "CHOLMOD solve")]:
+            ta, tb = num(a.get(col) or ""), num(b.get(col) or "")
             if ta and tb:
                 parts.append(f"{label} n^{math.log(tb / ta) / math.log(nb / na):.2f}")
         L.append(f"Growth from {int(na)} to {int(nb)} free particles (exponent of a power law "
