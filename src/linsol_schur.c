@@ -59,11 +59,12 @@
  * entries are explicit zeros.  CHOLMOD's 4, 16, 48 leave the lattice's
  * Schur matrix in many small supernodes, and each costs a BLAS call and an
  * OpenMP region (a futex system call in libgomp even when one thread
- * runs).  Measured with `drape bench --kernels` (schur_factor_ms, three
- * interleaved runs, one thread, same machine): 31 x 31 5.7-6.2 ms ->
- * 3.9-4.6 ms, 100 x 100 113-118 -> 97-103 ms, 200 x 200 953-961 ->
- * 889-917 ms, with the solve unchanged within noise (0.25-0.26 ms at
- * 31 x 31); 32, 128, 512 was slower than this at both sizes
+ * runs).  Measured with `drape bench --kernels` (schur_factor_ms, one
+ * thread, same machine; three interleaved runs at 31 x 31 and 100 x 100,
+ * two at 200 x 200): 31 x 31 5.7-6.2 ms -> 3.9-4.6 ms, 100 x 100 113-118 ->
+ * 97-103 ms, 200 x 200 953-961 -> 889-917 ms, with the solve unchanged
+ * within noise (0.25-0.26 ms at 31 x 31); 32, 128, 512 was slower than
+ * this at 31 x 31 and 100 x 100
  * (docs/performance.md, "Fewer supernodes"). */
 #define SCHUR_NRELAX_0 16
 #define SCHUR_NRELAX_1 64
