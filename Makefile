@@ -27,7 +27,7 @@ LDFLAGS ?=
 
 DEB_PACKAGES = libgsl-dev libsundials-dev libsuitesparse-dev libhdf5-dev \
                libyaml-dev check pkg-config libopenblas-dev \
-               libgeos-dev libjson-c-dev
+               libgeos-dev libjson-c-dev libxml2-dev
 
 # Flags drape itself needs (not overridable: the language level is part of
 # the code).  pkg-config is expanded lazily, so `make deps all` works on a
@@ -45,8 +45,9 @@ DRAPE_LIBS  = -lsundials_arkode -lsundials_cvode -lsundials_kinsol \
               -lklu -lcholmod -lsuitesparseconfig \
               -lgsl -lopenblas \
               $(shell pkg-config --libs yaml-0.1 hdf5-serial geos json-c 2>/dev/null) -lm
-CHECK_CFLAGS = $(shell pkg-config --cflags check 2>/dev/null)
-CHECK_LIBS   = $(shell pkg-config --libs check 2>/dev/null)
+# The tests also parse drape's SVG pictures with libxml2.
+CHECK_CFLAGS = $(shell pkg-config --cflags check libxml-2.0 2>/dev/null)
+CHECK_LIBS   = $(shell pkg-config --libs check libxml-2.0 2>/dev/null)
 
 ALL_CFLAGS = $(DRAPE_CPPFLAGS) $(DRAPE_CFLAGS) $(CPPFLAGS) $(CFLAGS)
 

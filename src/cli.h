@@ -9,8 +9,11 @@
 
 #define DRAPE_VERSION "0.1.0"
 
-/* Print "drape: <formatted error>" to stderr. */
+/* Print "drape: <formatted error>" to stderr (cli_io.c). */
 void drape_cli_print_error(const drape_error *e);
+/* A prefix for the messages of this process, e.g. "specimen 3 (seed 4): "
+ * in an ensemble's child; NULL or "" for none. */
+void drape_cli_set_error_context(const char *ctx);
 /* Warning callback for loaders: "drape: FILE:LINE:COL: key: warning: ...". */
 void drape_cli_warn(void *ctx, const drape_error *w);
 
@@ -27,5 +30,6 @@ int drape_cli_run(int argc, char **argv);
 int drape_cli_batch(int argc, char **argv);  /* cli_batch.c, docs/batch.md */
 int drape_cli_import(int argc, char **argv); /* cli_import.c, docs/batch.md */
 int drape_cli_bench(int argc, char **argv);  /* cli_bench.c, docs/performance.md */
+int drape_cli_compare(int argc, char **argv); /* cli_compare.c, docs/ensemble.md */
 
 #endif

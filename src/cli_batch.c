@@ -50,9 +50,11 @@ static const char batch_usage[] =
     "  -h, --help           show this help\n"
     "Passed on to every run (see `drape run --help`):\n"
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
-    "  --t-max T, --max-steps N, --strain-limit X, --method dynamic|static,\n"
-    "  --linear-solver NAME, --max-order N (--method static: each fabric's\n"
-    "  certified equilibrium in about a second; docs/equilibrium.md)\n"
+    "  --t-max T, --max-steps N, --strain-limit X, --method fall|dynamic|static,\n"
+    "  --linear-solver NAME, --max-order N, --specimens N, --seed N,\n"
+    "  --fall-time T, --fall-step T (each fabric's specimens run one after\n"
+    "  another in its process; the results carry the ensemble columns dc_sd,\n"
+    "  dc_ci95, dc_mode, nodes_hist, specimens: docs/ensemble.md)\n"
     "\n"
     "Progress goes to stderr only when it is a terminal.  The first interrupt\n"
     "(Ctrl-C) stops launching runs and waits for the running ones; a second\n"
@@ -361,6 +363,8 @@ static int launch(batch *b, job *jb, drape_error *err)
     av[k++] = "--format";
     av[k++] = "csv";
     av[k++] = "--quiet";
+    av[k++] = "-j"; /* the batch runs fabrics in parallel, each its specimens in turn */
+    av[k++] = "1";
     char ck[BATCH_PATH_MAX + 16];
     snprintf(ck, sizeof ck, "%s/drape.h5", frames);
     if (jb->cont && access(ck, F_OK) == 0) {
@@ -565,7 +569,7 @@ int drape_cli_batch(int argc, char **argv)
 {
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
            O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
-           O_MAXORDER };
+           O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -582,6 +586,10 @@ int drape_cli_batch(int argc, char **argv)
         {"method", required_argument, NULL, O_METHOD},
         {"linear-solver", required_argument, NULL, O_LINSOL},
         {"max-order", required_argument, NULL, O_MAXORDER},
+        {"specimens", required_argument, NULL, O_SPECIMENS},
+        {"seed", required_argument, NULL, O_SEED},
+        {"fall-time", required_argument, NULL, O_FALLTIME},
+        {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -643,10 +651,29 @@ int drape_cli_batch(int argc, char **argv)
             name = "--strain-limit";
             break;
         case O_METHOD:
-            if (strcmp(optarg, "dynamic") && strcmp(optarg, "static"))
-                return usage_error("--method: expected dynamic or static, got `%s'", optarg);
+            if (strcmp(optarg, "dynamic") && strcmp(optarg, "static") && strcmp(optarg, "fall"))
+                return usage_error("--method: expected fall, dynamic or static, got `%s'", optarg);
             name = "--method";
             break;
+        case O_FALLTIME:
+        case O_FALLSTEP:
+            name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
+            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 1)) return 2;
+            break;
+        case O_SPECIMENS:
+        case O_SEED: {
+            char *end;
+            errno = 0;
+            long v = strtol(optarg, &end, 10);
+            name = c == O_SPECIMENS ? "--specimens" : "--seed";
+            if (errno || *end || end == optarg || v < (c == O_SPECIMENS ? 1 : 0) ||
+                (c == O_SPECIMENS && v > DRAPE_SCENE_SPECIMENS_MAX))
+                return usage_error(c == O_SPECIMENS
+                                       ? "--specimens: expected an integer from 1 to 1000, got `%s'"
+                                       : "--seed: expected a non-negative integer, got `%s'",
+                                   optarg);
+            break;
+        }
         case O_LINSOL: {
             int ls;
             if (drape_linsol_parse(optarg, &ls) != 0)

@@ -14,6 +14,8 @@
  * builds on, hence this reader (docs/batch.md). */
 #include "cli_io.h"
 
+#include "cli.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -281,4 +283,30 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err)
                                "--out: cannot create directory: %s", strerror(errno));
     if (created) *created = 1;
     return 0;
+}
+
+/* ---- messages (only the command line prints: STYLE.md 6) ---------------- */
+
+/* Set by an ensemble's child process: "specimen 3 (seed 4): " */
+static char error_context[96];
+
+void drape_cli_set_error_context(const char *ctx)
+{
+    snprintf(error_context, sizeof error_context, "%s", ctx ? ctx : "");
+}
+
+void drape_cli_print_error(const drape_error *e)
+{
+    char buf[2048];
+    fprintf(stderr, "drape: %s%s\n", error_context, drape_error_format(e, buf, sizeof buf));
+}
+
+void drape_cli_warn(void *ctx, const drape_error *w)
+{
+    (void)ctx;
+    char buf[2048];
+    drape_error tmp = *w;
+    tmp.msg[0] = 0; /* location and key only; the text follows "warning:" */
+    drape_error_format(&tmp, buf, sizeof buf);
+    fprintf(stderr, "drape: %s%swarning: %s\n", error_context, buf, w->msg);
 }

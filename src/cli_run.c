@@ -27,6 +27,9 @@
 
 #include "cli.h"
 #include "cli_io.h"
+#include "cli_resume.h"
+#include "cli_result.h"
+#include "cli_run.h"
 #include "drape/alloc.h"
 #include "drape/diagnose.h"
 #include "drape/drape.h"
@@ -60,6 +63,19 @@ static const char run_usage[] =
     "auto); null where the scene does not produce one).  status is\n"
     "equilibrium, t_max, failed or interrupted.\n"
     "\n"
+    "Repeated specimens (scene key `specimens: N`, or --specimens N): a drape\n"
+    "test of N specimens that differ only in the perturbation seed (specimen k\n"
+    "= 0..N-1 uses seed + k), run in N child processes, -j at a time.  Then dc\n"
+    "is the mean DC, nodes the most frequent node count, and the result adds\n"
+    "dc_sd (sample standard deviation), dc_ci95 (half-width of the 95 %\n"
+    "interval of the mean, Student t), dc_mode (mean DC of the specimens with\n"
+    "the modal node count), nodes_hist ({\"3\": 2, \"4\": 6}; CSV 3:2;4:6),\n"
+    "specimens (one object per specimen: seed, status, dc, nodes, r_min_m,\n"
+    "r_max_m, cpu_s; CSV: the count), specimens_failed, seed (the first), cpu_s\n"
+    "(CPU seconds, child processes included); counters are summed over the\n"
+    "specimens, energies and radii averaged (docs/ensemble.md).  The shipped\n"
+    "Cusick and table scenes ask for 12.\n"
+    "\n"
     "Options (override the scene file):\n"
     "  --fabric FILE            fabric file instead of the scene's\n"
     "  --integrator NAME        auto, arkode-imex, arkode-dirk, arkode-erk,\n"
@@ -68,7 +84,12 @@ static const char run_usage[] =
     "  --spacing LEN            lattice spacing, e.g. 5mm or '0.5 cm'\n"
     "  --energy-form FORM       consistent or seed\n"
     "  --t-max T                end time, e.g. 3s\n"
-    "  --method METHOD          dynamic (default): integrate the equations of\n"
+    "  --method METHOD          fall (the default where the scene ends at\n"
+    "                           equilibrium): a short damped fall with a fixed\n"
+    "                           large step, then the static solver (about 0.8 s\n"
+    "                           per specimen at 1 cm; its ensembles reproduce\n"
+    "                           the dynamic ones: docs/ensemble.md); dynamic (the\n"
+    "                           default otherwise): integrate the equations of\n"
     "                           motion in time; static: minimise the potential\n"
     "                           energy directly (pseudo-transient continuation,\n"
     "                           Newton, Hessian check; docs/equilibrium.md): only\n"
@@ -84,7 +105,17 @@ static const char run_usage[] =
     "  --strain-limit X         stop (status failed) when a stretch edge's strain\n"
     "                           exceeds X, e.g. 0.2 = 20 % (scene: end.strain_limit,\n"
     "                           default 0.2)\n"
-    "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR\n"
+    "  --fall-time T, --fall-step T  the fall method's duration and fixed step\n"
+    "                           (scene: solver.fall_time, fall_step; default\n"
+    "                           10 and 1/32 pendulum times sqrt(h/g) of the free\n"
+    "                           length h: 0.78 s and 2.4 ms for the Cusick test)\n"
+    "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
+    "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
+    "  --seed N                 perturbation seed (of the first specimen)\n"
+    "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR;\n"
+    "                           with N > 1 specimens DIR/specimen-001/...; Cusick\n"
+    "                           and table scenes: DIR/shadow.svg, the top view of\n"
+    "                           every specimen's shadow with the nodes and the DC\n"
     "  --resume DIR             continue a run that was interrupted (SIGINT, SIGTERM)\n"
     "                           from DIR/drape.h5, with the options stored there\n"
     "  --format json|csv        result format on stdout (default json)\n"
@@ -96,11 +127,16 @@ static const char run_usage[] =
     "interrupted, the frames so far and DIR/drape.h5 kept for --resume; a second\n"
     "signal ends drape at once.\n"
     "\n"
-    "Exit status: 0 equilibrium or t_max, 1 invalid input, 2 bad command line,\n"
-    "3 I/O error, 4 the run failed (numerical), 5 out of memory, 130 interrupted\n"
-    "by SIGINT, 143 interrupted by SIGTERM.\n";
+    "An ensemble stops on SIGINT or SIGTERM as its specimens do; it cannot be\n"
+    "resumed (run it again).\n"
+    "\n"
+    "Exit status: 0 equilibrium or t_max (an ensemble: at least one specimen;\n"
+    "failed ones are counted in specimens_failed and named on stderr), 1 invalid\n"
+    "input, 2 bad command line, 3 I/O error, 4 the run failed (numerical; an\n"
+    "ensemble: every specimen), 5 out of memory, 130 interrupted by SIGINT, 143\n"
+    "interrupted by SIGTERM.\n";
 
-/* ---- result fields ----------------------------------------------------- */
+/* ---- result keys --------------------------------------------------------- */
 
 const char *const drape_cli_run_keys[] = {
     "fabric", "scene", "integrator", "energy_form", "rtol", "atol", "spacing_m",
@@ -112,120 +148,16 @@ const char *const drape_cli_run_keys[] = {
     "area_nominal_m2", "area_mesh_m2", "max_speed_m_s", "method", "iterations",
     "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
     "max_force_rel", "linear_solver", "lin_iters", "lin_factors", "mean_speed_m_s",
-    "integrator_switches", "max_order", NULL};
+    "integrator_switches", "max_order",
+    /* issue 15: repeated specimens (cli_specimens.c) and the fall method */
+    "cpu_s", "dc_sd", "dc_ci95", "dc_mode", "nodes_hist", "specimens",
+    "specimens_failed", "seed", "fall_time_s", "fall_step_s", NULL};
 
 int drape_cli_run_nkeys(void)
 {
     int n = 0;
     while (drape_cli_run_keys[n]) n++;
     return n;
-}
-
-/* 1 if the fields are exactly drape_cli_run_keys, in order ('.' as '_'). */
-
-
-typedef struct field {
-    const char *key;
-    const char *text; /* string value, or NULL */
-    double value;     /* number; NaN prints null */
-    int is_int;
-} field;
-
-#define MAX_FIELDS 64
-
-typedef struct result_fields {
-    field f[MAX_FIELDS];
-    int n;
-} result_fields;
-
-static int fields_match_keys(const result_fields *r)
-{
-    if (r->n != drape_cli_run_nkeys()) return 0;
-    for (int i = 0; i < r->n; i++) {
-        const char *a = r->f[i].key, *b = drape_cli_run_keys[i];
-        for (; *a && *b; a++, b++)
-            if (*a != *b && !(*a == '.' && *b == '_')) return 0;
-        if (*a || *b) return 0;
-    }
-    return 1;
-}
-
-static void add_num(result_fields *r, const char *key, double v)
-{
-    r->f[r->n++] = (field){key, NULL, v, 0};
-}
-static void add_int(result_fields *r, const char *key, double v)
-{
-    r->f[r->n++] = (field){key, NULL, v, 1};
-}
-static void add_str(result_fields *r, const char *key, const char *s)
-{
-    r->f[r->n++] = (field){key, s, 0.0, 0};
-}
-
-static void json_string(FILE *out, const char *s)
-{
-    fputc('"', out);
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\') fprintf(out, "\\%c", c);
-        else if (c < 0x20) fprintf(out, "\\u%04x", c);
-        else fputc(c, out);
-    }
-    fputc('"', out);
-}
-
-static void print_value(FILE *out, const field *f, int json)
-{
-    if (f->text) {
-        if (json) json_string(out, f->text);
-        else drape_cli_csv_put(out, f->text);
-    } else if (!isfinite(f->value) || (f->is_int && f->value < 0)) {
-        fputs(json ? "null" : "", out);
-    } else if (f->is_int) {
-        fprintf(out, "%.0f", f->value);
-    } else {
-        fprintf(out, "%.10g", f->value);
-    }
-}
-
-/* Keys "energy_J.kinetic" are nested in JSON and flattened with '_' in CSV. */
-static void print_json(FILE *out, const result_fields *r)
-{
-    fputc('{', out);
-    const char *group = NULL;
-    size_t glen = 0;
-    for (int i = 0; i < r->n; i++) {
-        const char *k = r->f[i].key, *dot = strchr(k, '.');
-        if (group && (!dot || (size_t)(dot - k) != glen || strncmp(k, group, glen) != 0)) {
-            fputc('}', out);
-            group = NULL;
-        }
-        if (i) fputs(", ", out);
-        if (dot && !group) {
-            group = k;
-            glen = (size_t)(dot - k);
-            fprintf(out, "\"%.*s\": {", (int)glen, k);
-        }
-        fprintf(out, "\"%s\": ", dot ? dot + 1 : k);
-        print_value(out, &r->f[i], 1);
-    }
-    if (group) fputc('}', out);
-    fputs("}\n", out);
-}
-
-static void print_csv(FILE *out, const result_fields *r)
-{
-    for (int i = 0; i < r->n; i++) {
-        if (i) fputc(',', out);
-        for (const char *k = r->f[i].key; *k; k++) fputc(*k == '.' ? '_' : *k, out);
-    }
-    fputc('\n', out);
-    for (int i = 0; i < r->n; i++) {
-        if (i) fputc(',', out);
-        print_value(out, &r->f[i], 0);
-    }
-    fputc('\n', out);
 }
 
 /* ---- observers ------------------------------------------------------------ */
@@ -283,6 +215,17 @@ static int parse_quantity(const char *opt, const char *text, drape_dim dim,
     return 0;
 }
 
+/* A count from min to max ("-j 0" = one per core). */
+static int parse_count(const char *text, int min, int max, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(text, &end, 10);
+    if (errno || end == text || *end || v < min || v > max) return -1;
+    *out = (int)v;
+    return 0;
+}
+
 /* ---- interruption ------------------------------------------------------------ */
 
 /* The signal that asked the run to stop, 0 = none.  The handler only sets
@@ -335,146 +278,22 @@ static const char *signal_name(int sig)
     return sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "a signal";
 }
 
-/* ---- resume ------------------------------------------------------------------ */
-
-#define RUN_RESUME_FORMAT 1 /* /run attribute resume_format */
-
-/* Everything --resume takes from DIR/drape.h5. */
-typedef struct resume_info {
-    drape_h5_checkpoint ck;
-    char h5_path[4200];
-    char scene_path[DRAPE_ERROR_FILE_MAX], fabric_path[DRAPE_ERROR_FILE_MAX];
-    char integrator[DRAPE_INTEGRATOR_NAME_MAX], form[32], linsol[32];
-    double rtol, atol, spacing, t_max, strain_limit, below_since;
-    long max_steps;
-    int max_order;   /* 0: the scene's (files written before --max-order) */
-    int frames;      /* frames written before (OBJ and HDF5 numbering) */
-    int had_h5;      /* the scene writes drape.h5 (else it is a checkpoint only) */
-    drape_diag_ref ref;
-} resume_info;
-
-static const char *ck_text(const drape_h5_checkpoint *c, const char *key)
-{
-    const drape_kv *kv = drape_kv_find(c->run, c->n_run, key);
-    return kv && kv->text ? kv->text : NULL;
-}
-
-static double ck_num(const drape_h5_checkpoint *c, const char *key)
-{
-    const drape_kv *kv = drape_kv_find(c->run, c->n_run, key);
-    return kv && !kv->text ? kv->value : NAN;
-}
-
-/* A stored text must be the file's current text (the run continues on the
- * same inputs). */
-static int same_input(const char *path, const char *stored, const char *what,
-                      const char *h5, drape_error *err)
-{
-    drape_error e2;
-    drape_error_clear(&e2);
-    if (!stored)
-        return drape_error_set(err, DRAPE_E_IO, h5, 0, 0, NULL,
-                               "--resume: the %s text is not stored in the file", what);
-    char *now = drape_cli_read_file(path, DRAPE_YDOC_MAX_BYTES, NULL, &e2);
-    if (!now) {
-        *err = e2;
-        return -1;
-    }
-    int same = strcmp(now, stored) == 0;
-    drape_free(now);
-    if (!same)
-        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, NULL,
-                               "--resume: this %s file changed since the run was interrupted "
-                               "(%s keeps the old text as attribute %s_yaml); restore it, or "
-                               "start a new run", what, h5, what);
-    return 0;
-}
-
-static int resume_load(const char *dir, resume_info *ri, drape_error *err)
-{
-    drape_h5_checkpoint *c = &ri->ck;
-    snprintf(ri->h5_path, sizeof ri->h5_path, "%s/drape.h5", dir);
-    if (drape_h5_checkpoint_read(ri->h5_path, c, err) != 0) {
-        if (access(ri->h5_path, F_OK) != 0) {
-            drape_error_clear(err);
-            return drape_error_set(err, DRAPE_E_IO, ri->h5_path, 0, 0, NULL,
-                                   "--resume: no such file (a run interrupted with --out DIR "
-                                   "leaves it there)");
-        }
-        return -1;
-    }
-    const drape_kv *st = drape_kv_find(c->stats, c->n_stats, "status");
-    const char *status = st && st->text ? st->text : "";
-    if (strcmp(status, "interrupted") != 0)
-        return drape_error_set(err, DRAPE_E_USAGE, ri->h5_path, 0, 0, NULL,
-                               "--resume: the run ended with status %s, not interrupted: "
-                               "nothing to resume", status[0] ? status : "(none)");
-    const char *sp = ck_text(c, "scene_path"), *fp = ck_text(c, "fabric_path");
-    const char *in = ck_text(c, "integrator"), *fo = ck_text(c, "energy_form");
-    const char *ls = ck_text(c, "linear_solver");
-    if (ck_num(c, "resume_format") != RUN_RESUME_FORMAT || !sp || !fp || !in || !fo || !ls)
-        return drape_error_set(err, DRAPE_E_IO, ri->h5_path, 0, 0, NULL,
-                               "--resume: no usable /run group (written by another version "
-                               "of drape?)");
-    if (strlen(sp) >= sizeof ri->scene_path || strlen(fp) >= sizeof ri->fabric_path)
-        return drape_error_set(err, DRAPE_E_IO, ri->h5_path, 0, 0, NULL,
-                               "--resume: stored input paths too long");
-    snprintf(ri->scene_path, sizeof ri->scene_path, "%s", sp);
-    snprintf(ri->fabric_path, sizeof ri->fabric_path, "%s", fp);
-    snprintf(ri->integrator, sizeof ri->integrator, "%s", in);
-    snprintf(ri->form, sizeof ri->form, "%s", fo);
-    snprintf(ri->linsol, sizeof ri->linsol, "%s", ls);
-    ri->rtol = ck_num(c, "rtol");
-    ri->atol = ck_num(c, "atol");
-    ri->spacing = ck_num(c, "spacing_m");
-    ri->t_max = ck_num(c, "t_max_s");
-    ri->strain_limit = ck_num(c, "strain_limit");
-    ri->below_since = ck_num(c, "eq_below_since_s");
-    double ms = ck_num(c, "max_steps"), fr = ck_num(c, "frames"), h5 = ck_num(c, "hdf5");
-    ri->ref.valid = ck_num(c, "energy_ref_valid") == 1.0;
-    ri->ref.energy_J = ck_num(c, "energy_ref_J");
-    ri->ref.scale_J = ck_num(c, "energy_scale_J");
-    ri->ref.kinetic_J = ck_num(c, "energy_ref_kinetic_J");
-    ri->ref.E.stretch = ck_num(c, "energy_ref_stretch_J");
-    ri->ref.E.bend = ck_num(c, "energy_ref_bend_J");
-    ri->ref.E.shear = ck_num(c, "energy_ref_shear_J");
-    ri->ref.E.gravity = ck_num(c, "energy_ref_gravity_J");
-    if (!(ri->rtol > 0) || !(ri->atol > 0) || !(ri->spacing > 0) || !(ri->t_max > 0) ||
-        !(ri->strain_limit > 0) || !(ms >= 0) || !(fr >= 0 && fr < INT_MAX) ||
-        !(h5 == 0 || h5 == 1) || isnan(ri->below_since) ||
-        (ri->ref.valid && !(isfinite(ri->ref.energy_J) && ri->ref.scale_J > 0)))
-        return drape_error_set(err, DRAPE_E_IO, ri->h5_path, 0, 0, NULL,
-                               "--resume: missing or invalid values in /run");
-    ri->max_steps = (long)ms;
-    double mo = ck_num(c, "max_order");
-    ri->max_order = mo >= 1 && mo <= 5 ? (int)mo : 0;
-    ri->frames = (int)fr;
-    ri->had_h5 = h5 == 1;
-    if (same_input(ri->scene_path, c->scene_yaml, "scene", ri->h5_path, err) != 0 ||
-        same_input(ri->fabric_path, c->fabric_yaml, "fabric", ri->h5_path, err) != 0)
-        return -1;
-    return 0;
-}
-
-/* Counters of the interrupted part are added to the resumed part's. */
-static void add_previous(const drape_h5_checkpoint *c, const char *key, long *v)
-{
-    const drape_kv *kv = drape_kv_find(c->stats, c->n_stats, key);
-    if (kv && !kv->text && kv->value >= 0 && *v >= 0) *v += (long)kv->value;
-}
+/* ---- methods ----------------------------------------------------------------- */
 
 /* The static method: minimise E_pot from the initial state and present the
  * result as a run (status equilibrium or failed, no time, no integrator
  * statistics).  Frames: the final state only.  Returns 1 on success. */
-static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
-                      drape_sim_result *res, drape_equilibrium_result *er,
-                      drape_error *err)
+static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
+                      double fall_step, run_ctx *rc, drape_sim_result *res,
+                      drape_equilibrium_result *er, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
     drape_equilibrium_opts eo;
     drape_equilibrium_opts_from_fabric(&eo, f);
+    eo.dyn_time = fall_time; /* the fall method: damped large-step dynamics first */
+    eo.dyn_dt = fall_step;
     eo.stop = &stop_signal;
-    snprintf(res->integrator, sizeof res->integrator, "static");
+    snprintf(res->integrator, sizeof res->integrator, "%s", fall_time > 0.0 ? "fall" : "static");
     res->status = DRAPE_SIM_FAILED;
     res->t_end_s = NAN;
     /* no integrator: every counter "not available" (-1), printed as null */
@@ -511,180 +330,17 @@ static int run_static(drape_model *m, const drape_fabric *f, run_ctx *rc,
     return 1;
 }
 
-/* The run's options and resume state for /run (strings point into s,
- * res, or static text; nums into the caller's array). */
-typedef struct run_kv {
-    drape_kv kv[32];
-    int n;
-    char scene_abs[PATH_MAX + DRAPE_ERROR_FILE_MAX], fabric_abs[PATH_MAX + DRAPE_ERROR_FILE_MAX];
-} run_kv;
-
-static void kv_num(run_kv *k, const char *key, double v)
+int drape_cli_run_one(const run_args *ra, run_child *child)
 {
-    k->kv[k->n++] = (drape_kv){key, NULL, v};
-}
-
-static void kv_str(run_kv *k, const char *key, const char *text)
-{
-    k->kv[k->n++] = (drape_kv){key, text, 0.0};
-}
-
-/* path made absolute against the working directory (kept as given when
- * that fails), so that --resume works from anywhere. */
-static void abs_path(const char *path, char *out, size_t n)
-{
-    char cwd[PATH_MAX];
-    if (path[0] != '/' && getcwd(cwd, sizeof cwd)) {
-        int r = snprintf(out, n, "%s/%s", cwd, path);
-        if (r >= 0 && (size_t)r < n) return;
-    }
-    snprintf(out, n, "%s", path);
-}
-
-static void fill_run_kv(run_kv *k, const char *scene_path, const drape_scene *s,
-                        const drape_sim_opts *so, const drape_sim_result *res, int frames)
-{
-    k->n = 0;
-    abs_path(scene_path, k->scene_abs, sizeof k->scene_abs);
-    abs_path(s->fabric_path, k->fabric_abs, sizeof k->fabric_abs);
-    kv_num(k, "resume_format", RUN_RESUME_FORMAT);
-    kv_str(k, "method", "dynamic");
-    kv_str(k, "scene_path", k->scene_abs);
-    kv_str(k, "fabric_path", k->fabric_abs);
-    kv_str(k, "integrator", so->integrator);
-    kv_num(k, "rtol", so->rtol);
-    kv_num(k, "atol", so->atol);
-    kv_num(k, "spacing_m", s->spacing);
-    kv_str(k, "energy_form", drape_energy_form_name(s->energy_form));
-    kv_num(k, "t_max_s", so->t_max);
-    kv_num(k, "strain_limit", so->strain_limit);
-    kv_num(k, "max_steps", (double)so->max_steps);
-    kv_num(k, "max_order", (double)so->max_order);
-    kv_str(k, "linear_solver", drape_linsol_name(so->linsol));
-    kv_num(k, "frames", frames);
-    kv_num(k, "hdf5", s->out_hdf5 ? 1.0 : 0.0);
-    kv_num(k, "eq_below_since_s", res->eq_below_since);
-    kv_num(k, "energy_ref_valid", res->diag_ref.valid ? 1.0 : 0.0);
-    kv_num(k, "energy_ref_J", res->diag_ref.energy_J);
-    kv_num(k, "energy_scale_J", res->diag_ref.scale_J);
-    kv_num(k, "energy_ref_kinetic_J", res->diag_ref.kinetic_J);
-    kv_num(k, "energy_ref_stretch_J", res->diag_ref.E.stretch);
-    kv_num(k, "energy_ref_bend_J", res->diag_ref.E.bend);
-    kv_num(k, "energy_ref_shear_J", res->diag_ref.E.shear);
-    kv_num(k, "energy_ref_gravity_J", res->diag_ref.E.gravity);
-    kv_num(k, "signal", stop_signal);
-}
-
-int drape_cli_run(int argc, char **argv)
-{
-    enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
-           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
-           O_STRAIN, O_MAXORDER };
-    static const struct option opts[] = {
-        {"fabric", required_argument, NULL, O_FABRIC},
-        {"integrator", required_argument, NULL, O_INTEGRATOR},
-        {"rtol", required_argument, NULL, O_RTOL},
-        {"atol", required_argument, NULL, O_ATOL},
-        {"spacing", required_argument, NULL, O_SPACING},
-        {"energy-form", required_argument, NULL, O_FORM},
-        {"t-max", required_argument, NULL, O_TMAX},
-        {"out", required_argument, NULL, O_OUT},
-        {"max-steps", required_argument, NULL, O_MAXSTEPS},
-        {"max-order", required_argument, NULL, O_MAXORDER},
-        {"method", required_argument, NULL, O_METHOD},
-        {"linear-solver", required_argument, NULL, O_LINSOL},
-        {"strain-limit", required_argument, NULL, O_STRAIN},
-        {"resume", required_argument, NULL, O_RESUME},
-        {"format", required_argument, NULL, O_FORMAT},
-        {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0}};
-    const char *fabric_path = NULL, *integrator = NULL, *form = NULL, *out_dir = NULL;
-    const char *resume_dir = NULL, *run_opt = NULL;
-    double rtol = 0, atol = 0, spacing = 0, t_max = 0, strain_limit = 0;
-    int csv = 0, quiet = 0, c;
-    long max_steps = 0;
-    int max_order = 0;
-    int method_static = 0, linsol = 0;
-    while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
-        switch (c) {
-        case O_FABRIC: fabric_path = optarg; break;
-        case O_INTEGRATOR: integrator = optarg; break;
-        case O_RTOL:
-            if (parse_quantity("--rtol", optarg, DRAPE_DIM_NONE, &rtol)) return 2;
-            if (!(rtol > 0 && rtol < 1)) return usage_error("--rtol: must be in (0, 1), got %s%s", optarg, "");
-            break;
-        case O_ATOL:
-            if (parse_quantity("--atol", optarg, DRAPE_DIM_LENGTH, &atol)) return 2;
-            if (!(atol > 0)) return usage_error("--atol: must be positive, got %s%s", optarg, "");
-            break;
-        case O_SPACING:
-            if (parse_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, &spacing)) return 2;
-            if (!(spacing > 0)) return usage_error("--spacing: must be positive, got %s%s", optarg, "");
-            break;
-        case O_FORM: form = optarg; break;
-        case O_TMAX:
-            if (parse_quantity("--t-max", optarg, DRAPE_DIM_TIME, &t_max)) return 2;
-            if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
-            break;
-        case O_STRAIN:
-            if (parse_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, &strain_limit)) return 2;
-            if (!(strain_limit > 0) || !isfinite(strain_limit))
-                return usage_error("--strain-limit: must be a positive number, got %s%s", optarg, "");
-            break;
-        case O_OUT: out_dir = optarg; break;
-        case O_RESUME: resume_dir = optarg; break;
-        case O_LINSOL:
-            if (drape_linsol_parse(optarg, &linsol) != 0)
-                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'%s", optarg, "");
-            break;
-        case O_METHOD:
-            if (strcmp(optarg, "dynamic") == 0) method_static = 0;
-            else if (strcmp(optarg, "static") == 0) method_static = 1;
-            else return usage_error("--method: expected dynamic or static, got `%s'%s", optarg, "");
-            break;
-        case O_MAXSTEPS: {
-            char *end;
-            errno = 0;
-            max_steps = strtol(optarg, &end, 10);
-            if (errno || *end || max_steps <= 0)
-                return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
-            break;
-        }
-        case O_MAXORDER:
-            if (drape_max_order_parse(optarg, &max_order) != 0)
-                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'%s", optarg, "");
-            break;
-        case O_FORMAT:
-            if (strcmp(optarg, "json") == 0) csv = 0;
-            else if (strcmp(optarg, "csv") == 0) csv = 1;
-            else return usage_error("--format: expected json or csv, got `%s'%s", optarg, "");
-            break;
-        case 'q': quiet = 1; break;
-        case 'h': fputs(run_usage, stdout); return 0;
-        default:
-            fputs("Try `drape run --help'.\n", stderr);
-            return drape_error_exit_status(DRAPE_E_USAGE);
-        }
-        if (c != O_RESUME && c != O_FORMAT && c != 'q') run_opt = argv[optind - 1];
-    }
-    if (argc - optind > 1) return usage_error("run: one scene at a time, got `%s' and `%s'", argv[optind], argv[optind + 1]);
-    if (resume_dir && optind < argc)
-        return usage_error("--resume: no scene file with it (the run's is stored in %s/drape.h5), got `%s'",
-                           resume_dir, argv[optind]);
-    if (resume_dir && run_opt)
-        return usage_error("--resume: only --format and -q go with it (the run's options are "
-                           "stored in %s/drape.h5), got `%s'", resume_dir, run_opt);
-    const char *scene_path = optind < argc ? argv[optind] : DEFAULT_SCENE;
-    if (integrator) {
-        int ok = 0;
-        for (int i = 0; drape_integrator_names[i]; i++)
-            ok |= strcmp(drape_integrator_names[i], integrator) == 0;
-        if (!ok) return usage_error("--integrator: unknown integrator `%s'%s; see `drape run --help'", integrator, "");
-    }
-    if (form && strcmp(form, "consistent") && strcmp(form, "seed"))
-        return usage_error("--energy-form: expected consistent or seed, got `%s'%s", form, "");
-
+    const char *scene_path = ra->scene_path, *fabric_path = ra->fabric_path;
+    const char *integrator = ra->integrator, *form = ra->form, *out_dir = ra->out_dir;
+    const char *resume_dir = ra->resume_dir;
+    double rtol = ra->rtol, atol = ra->atol, spacing = ra->spacing, t_max = ra->t_max;
+    double strain_limit = ra->strain_limit;
+    long max_steps = ra->max_steps;
+    int max_order = ra->max_order, linsol = ra->linsol, csv = ra->csv, quiet = ra->quiet;
+    int method = ra->method;
+    double cpu0 = drape_cli_cpu_s();
     drape_error err;
     drape_error_clear(&err);
     drape_scene s;
@@ -713,7 +369,7 @@ int drape_cli_run(int argc, char **argv)
     if (resume_dir) {
         ri = drape_calloc(1, sizeof *ri);
         if (!ri) goto nomem;
-        if (resume_load(resume_dir, ri, &err) != 0) goto fail;
+        if (drape_cli_resume_load(resume_dir, ri, &err) != 0) goto fail;
         scene_path = ri->scene_path;
         fabric_path = ri->fabric_path;
         integrator = ri->integrator;
@@ -730,7 +386,7 @@ int drape_cli_run(int argc, char **argv)
     }
 
     if (drape_scene_load_flags(scene_path, fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u, &s,
-                               &err, resume_dir ? NULL : drape_cli_warn, NULL) != 0)
+                               &err, resume_dir || ra->no_warnings ? NULL : drape_cli_warn, NULL) != 0)
         goto fail;
     if (fabric_path) snprintf(s.fabric_path, sizeof s.fabric_path, "%s", fabric_path);
     if (integrator) snprintf(s.integrator, sizeof s.integrator, "%s", integrator);
@@ -741,8 +397,21 @@ int drape_cli_run(int argc, char **argv)
     if (strain_limit > 0) s.strain_limit = strain_limit;
     if (max_order > 0) s.max_order = max_order;
     if (form) s.energy_form = strcmp(form, "seed") == 0 ? DRAPE_FORM_SEED : DRAPE_FORM_CONSISTENT;
+    if (ra->has_seed) s.perturb_seed = ra->seed;
+    if (ra->fall_time > 0) s.fall_time = ra->fall_time;
+    if (ra->fall_step > 0) s.fall_step = ra->fall_step;
+    /* --resume continues a dynamic run (only those are interrupted with a
+     * checkpoint); otherwise --method, the scene's solver.method, and the
+     * default: the fall method where the scene asks for an equilibrium */
+    if (resume_dir) method = DRAPE_METHOD_DYNAMIC;
+    if (method == DRAPE_METHOD_DEFAULT) method = s.method;
+    if (method == DRAPE_METHOD_DEFAULT)
+        method = s.has_equilibrium ? DRAPE_METHOD_FALL : DRAPE_METHOD_DYNAMIC;
+    int method_static = method != DRAPE_METHOD_DYNAMIC; /* static or fall */
+    double fall_time = 0.0, fall_step = 0.0;
+    if (method == DRAPE_METHOD_FALL) drape_scene_fall_params(&s, &fall_time, &fall_step);
 
-    if (drape_fabric_load(s.fabric_path, &f, &err, resume_dir ? NULL : drape_cli_warn, NULL) != 0)
+    if (drape_fabric_load(s.fabric_path, &f, &err, resume_dir || ra->no_warnings ? NULL : drape_cli_warn, NULL) != 0)
         goto fail;
     if (drape_scene_check_with_fabric(&s, &f, &err) != 0) goto fail;
     L = drape_lattice_new(&s, &f, &err);
@@ -776,7 +445,7 @@ int drape_cli_run(int argc, char **argv)
     rc.frame = ri ? ri->frames : 0;
 
     if (method_static) {
-        sim_ok = run_static(m, &f, &rc, &res, &er, &err);
+        sim_ok = run_static(m, &f, fall_time, fall_step, &rc, &res, &er, &err);
         if (stop_signal) { /* the solve stops at its next iteration */
             interrupted = 1;
             res.status = DRAPE_SIM_INTERRUPTED;
@@ -803,16 +472,16 @@ int drape_cli_run(int argc, char **argv)
                                &res, &err) == 0;
         interrupted = sim_ok && res.status == DRAPE_SIM_INTERRUPTED;
         if (ri) { /* one run: the counters and time of both parts */
-            add_previous(&ri->ck, "steps", &res.stats.steps);
-            add_previous(&ri->ck, "rhs_evals", &res.stats.rhs_evals);
-            add_previous(&ri->ck, "jac_evals", &res.stats.jac_evals);
-            add_previous(&ri->ck, "lin_setups", &res.stats.lin_setups);
-            add_previous(&ri->ck, "nonlin_iters", &res.stats.nonlin_iters);
-            add_previous(&ri->ck, "err_test_fails", &res.stats.err_test_fails);
-            add_previous(&ri->ck, "conv_fails", &res.stats.conv_fails);
-            add_previous(&ri->ck, "lin_iters", &res.stats.lin_iters);
-            add_previous(&ri->ck, "lin_factors", &res.stats.lin_factors);
-            add_previous(&ri->ck, "integrator_switches", &res.stats.switches);
+            drape_cli_resume_add_previous(&ri->ck, "steps", &res.stats.steps);
+            drape_cli_resume_add_previous(&ri->ck, "rhs_evals", &res.stats.rhs_evals);
+            drape_cli_resume_add_previous(&ri->ck, "jac_evals", &res.stats.jac_evals);
+            drape_cli_resume_add_previous(&ri->ck, "lin_setups", &res.stats.lin_setups);
+            drape_cli_resume_add_previous(&ri->ck, "nonlin_iters", &res.stats.nonlin_iters);
+            drape_cli_resume_add_previous(&ri->ck, "err_test_fails", &res.stats.err_test_fails);
+            drape_cli_resume_add_previous(&ri->ck, "conv_fails", &res.stats.conv_fails);
+            drape_cli_resume_add_previous(&ri->ck, "lin_iters", &res.stats.lin_iters);
+            drape_cli_resume_add_previous(&ri->ck, "lin_factors", &res.stats.lin_factors);
+            drape_cli_resume_add_previous(&ri->ck, "integrator_switches", &res.stats.switches);
             const drape_kv *w = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "wall_s");
             if (w && !w->text && w->value >= 0) res.wall_s += w->value;
         }
@@ -843,72 +512,96 @@ int drape_cli_run(int argc, char **argv)
         else drape_cli_print_error(&e2);
     }
 
-    result_fields r;
-    r.n = 0;
-    add_str(&r, "fabric", f.name);
-    add_str(&r, "scene", drape_scene_kind_name(s.kind));
-    add_str(&r, "integrator", res.integrator[0] ? res.integrator : s.integrator);
-    add_str(&r, "energy_form", drape_energy_form_name(s.energy_form));
-    add_num(&r, "rtol", s.rtol);
-    add_num(&r, "atol", s.atol);
-    add_num(&r, "spacing_m", s.spacing);
-    add_int(&r, "particles", L->n);
-    add_int(&r, "free_particles", L->n_free);
-    add_str(&r, "status", drape_sim_status_name(res.status));
-    add_num(&r, "t_end_s", res.t_end_s);
-    add_num(&r, "dc", have_dc ? sh.dc : NAN);
-    add_int(&r, "nodes", have_dc ? sh.nodes : NAN);
-    add_num(&r, "r_min_m", have_dc ? sh.r_min_m : NAN);
-    add_num(&r, "r_max_m", have_dc ? sh.r_max_m : NAN);
-    add_num(&r, "tip_angle_deg", have_cant ? cant.tip_angle_deg : NAN);
-    add_num(&r, "bending_length_m", have_cant ? cant.bending_length_m : NAN);
-    add_num(&r, "flexural_rigidity_Nm", have_cant ? cant.flexural_rigidity_Nm : NAN);
-    add_num(&r, "energy_J.kinetic", have_state ? res.kinetic_J : NAN);
-    add_num(&r, "energy_J.stretch", have_state ? res.energy.stretch : NAN);
-    add_num(&r, "energy_J.bend", have_state ? res.energy.bend : NAN);
-    add_num(&r, "energy_J.shear", have_state ? res.energy.shear : NAN);
-    add_num(&r, "energy_J.gravity", have_state ? res.energy.gravity : NAN);
-    add_num(&r, "max_strain", have_state ? res.max_strain : NAN);
-    add_num(&r, "wall_s", res.wall_s);
-    add_int(&r, "steps", res.stats.steps);
-    add_int(&r, "rhs_evals", res.stats.rhs_evals);
-    add_int(&r, "jac_evals", res.stats.jac_evals);
-    add_int(&r, "lin_setups", res.stats.lin_setups);
-    add_int(&r, "nonlin_iters", res.stats.nonlin_iters);
-    add_int(&r, "err_test_fails", res.stats.err_test_fails);
-    add_int(&r, "conv_fails", res.stats.conv_fails);
-    add_num(&r, "mass_kg", L->mass_total);
-    add_num(&r, "area_nominal_m2", L->area_nominal);
-    add_num(&r, "area_mesh_m2", have_dc ? sh.a_specimen_mesh_m2 : NAN);
-    add_num(&r, "max_speed_m_s", have_state || !sim_ok ? res.max_speed : NAN);
-    add_str(&r, "method", method_static ? "static" : "dynamic");
+    drape_cli_result r;
+    memset(&r, 0, sizeof r);
+    drape_cli_result_str(&r, "fabric", f.name);
+    drape_cli_result_str(&r, "scene", drape_scene_kind_name(s.kind));
+    drape_cli_result_str(&r, "integrator", res.integrator[0] ? res.integrator : s.integrator);
+    drape_cli_result_str(&r, "energy_form", drape_energy_form_name(s.energy_form));
+    drape_cli_result_num(&r, "rtol", s.rtol);
+    drape_cli_result_num(&r, "atol", s.atol);
+    drape_cli_result_num(&r, "spacing_m", s.spacing);
+    drape_cli_result_int(&r, "particles", L->n);
+    drape_cli_result_int(&r, "free_particles", L->n_free);
+    drape_cli_result_str(&r, "status", drape_sim_status_name(res.status));
+    drape_cli_result_num(&r, "t_end_s", res.t_end_s);
+    drape_cli_result_num(&r, "dc", have_dc ? sh.dc : NAN);
+    drape_cli_result_int(&r, "nodes", have_dc ? sh.nodes : NAN);
+    drape_cli_result_num(&r, "r_min_m", have_dc ? sh.r_min_m : NAN);
+    drape_cli_result_num(&r, "r_max_m", have_dc ? sh.r_max_m : NAN);
+    drape_cli_result_num(&r, "tip_angle_deg", have_cant ? cant.tip_angle_deg : NAN);
+    drape_cli_result_num(&r, "bending_length_m", have_cant ? cant.bending_length_m : NAN);
+    drape_cli_result_num(&r, "flexural_rigidity_Nm", have_cant ? cant.flexural_rigidity_Nm : NAN);
+    drape_cli_result_num(&r, "energy_J.kinetic", have_state ? res.kinetic_J : NAN);
+    drape_cli_result_num(&r, "energy_J.stretch", have_state ? res.energy.stretch : NAN);
+    drape_cli_result_num(&r, "energy_J.bend", have_state ? res.energy.bend : NAN);
+    drape_cli_result_num(&r, "energy_J.shear", have_state ? res.energy.shear : NAN);
+    drape_cli_result_num(&r, "energy_J.gravity", have_state ? res.energy.gravity : NAN);
+    drape_cli_result_num(&r, "max_strain", have_state ? res.max_strain : NAN);
+    drape_cli_result_num(&r, "wall_s", res.wall_s);
+    drape_cli_result_int(&r, "steps", res.stats.steps);
+    drape_cli_result_int(&r, "rhs_evals", res.stats.rhs_evals);
+    drape_cli_result_int(&r, "jac_evals", res.stats.jac_evals);
+    drape_cli_result_int(&r, "lin_setups", res.stats.lin_setups);
+    drape_cli_result_int(&r, "nonlin_iters", res.stats.nonlin_iters);
+    drape_cli_result_int(&r, "err_test_fails", res.stats.err_test_fails);
+    drape_cli_result_int(&r, "conv_fails", res.stats.conv_fails);
+    drape_cli_result_num(&r, "mass_kg", L->mass_total);
+    drape_cli_result_num(&r, "area_nominal_m2", L->area_nominal);
+    drape_cli_result_num(&r, "area_mesh_m2", have_dc ? sh.a_specimen_mesh_m2 : NAN);
+    drape_cli_result_num(&r, "max_speed_m_s", have_state || !sim_ok ? res.max_speed : NAN);
+    drape_cli_result_str(&r, "method", drape_method_names[method]);
     /* static method only (null for dynamic runs) */
-    add_int(&r, "iterations", method_static ? er.iterations : NAN);
-    add_int(&r, "factorizations", method_static ? er.factorizations : NAN);
-    if (method_static && er.certified >= 0) add_str(&r, "certified", er.certified ? "minimum" : "saddle");
-    else add_num(&r, "certified", NAN);
-    add_num(&r, "min_pivot_N_m", method_static ? er.min_pivot : NAN);
-    add_num(&r, "omega_min_rad_s", method_static ? er.omega_min : NAN);
-    add_num(&r, "max_force_rel", method_static ? er.max_force_rel : NAN);
-    add_str(&r, "linear_solver", method_static ? "cholmod"
+    drape_cli_result_int(&r, "iterations", method_static ? er.iterations : NAN);
+    drape_cli_result_int(&r, "factorizations", method_static ? er.factorizations : NAN);
+    if (method_static && er.certified >= 0) drape_cli_result_str(&r, "certified", er.certified ? "minimum" : "saddle");
+    else drape_cli_result_num(&r, "certified", NAN);
+    drape_cli_result_num(&r, "min_pivot_N_m", method_static ? er.min_pivot : NAN);
+    drape_cli_result_num(&r, "omega_min_rad_s", method_static ? er.omega_min : NAN);
+    drape_cli_result_num(&r, "max_force_rel", method_static ? er.max_force_rel : NAN);
+    drape_cli_result_str(&r, "linear_solver", method_static ? "cholmod"
                                  : res.stats.linsol > 0 ? drape_linsol_name(res.stats.linsol)
                                                         : "none");
-    add_int(&r, "lin_iters", res.stats.lin_iters);
-    add_int(&r, "lin_factors", res.stats.lin_factors);
+    drape_cli_result_int(&r, "lin_iters", res.stats.lin_iters);
+    drape_cli_result_int(&r, "lin_factors", res.stats.lin_factors);
     /* the speed the equilibrium test used: largest particle speed averaged
      * over the last check interval (sim.h); null without checks */
-    add_num(&r, "mean_speed_m_s", method_static ? NAN : res.check_speed);
+    drape_cli_result_num(&r, "mean_speed_m_s", method_static ? NAN : res.check_speed);
     /* auto only (-1, null, for the others): changes between cvode-bdf and arkode-erk */
-    add_int(&r, "integrator_switches", res.stats.switches);
+    drape_cli_result_int(&r, "integrator_switches", res.stats.switches);
     /* cvode-bdf's highest order (alone or inside auto); null for the others */
     {
         int bdf = method_static ? 0
                                 : drape_integrator_bdf_order(res.integrator[0] ? res.integrator
                                                                                : s.integrator,
                                                              s.max_order);
-        add_int(&r, "max_order", bdf > 0 ? bdf : NAN);
+        drape_cli_result_int(&r, "max_order", bdf > 0 ? bdf : NAN);
     }
-    if (!fields_match_keys(&r)) {
+    /* added (issue 15): the ensemble's keys; for one specimen, its own */
+    drape_cli_specimen one;
+    memset(&one, 0, sizeof one);
+    one.seed = s.perturb_seed;
+    snprintf(one.status, sizeof one.status, "%s", drape_sim_status_name(res.status));
+    one.dc = have_dc ? sh.dc : NAN;
+    one.nodes = have_dc ? sh.nodes : -1;
+    one.r_min_m = have_dc ? sh.r_min_m : NAN;
+    one.r_max_m = have_dc ? sh.r_max_m : NAN;
+    one.cpu_s = drape_cli_cpu_s() - cpu0;
+    drape_cli_result_num(&r, "cpu_s", drape_cli_cpu_s());
+    drape_cli_result_num(&r, "dc_sd", NAN);
+    drape_cli_result_num(&r, "dc_ci95", NAN);
+    drape_cli_result_num(&r, "dc_mode", one.dc);
+    if (have_dc && sh.nodes >= 0)
+        r.hist[sh.nodes > DRAPE_ENSEMBLE_MAX_NODES ? DRAPE_ENSEMBLE_MAX_NODES : sh.nodes] = 1;
+    drape_cli_result_hist(&r, "nodes_hist");
+    r.spec = &one;
+    r.n_spec = 1;
+    drape_cli_result_specimens(&r, "specimens");
+    drape_cli_result_int(&r, "specimens_failed", res.status == DRAPE_SIM_FAILED ? 1 : 0);
+    drape_cli_result_int(&r, "seed", (double)s.perturb_seed);
+    drape_cli_result_num(&r, "fall_time_s", method == DRAPE_METHOD_FALL ? fall_time : NAN);
+    drape_cli_result_num(&r, "fall_step_s", method == DRAPE_METHOD_FALL ? fall_step : NAN);
+    if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");
         goto fail;
@@ -922,10 +615,15 @@ int drape_cli_run(int argc, char **argv)
         if (!rc.h5) goto fail;
     }
     if (rc.h5) {
-        drape_kv kv[MAX_FIELDS + 2];
+        drape_kv kv[DRAPE_CLI_RESULT_MAX + 2];
         int nkv = 0;
-        for (int i = 0; i < r.n; i++)
-            kv[nkv++] = (drape_kv){r.f[i].key, r.f[i].text, r.f[i].value};
+        for (int i = 0; i < r.n; i++) {
+            const drape_cli_field *fl = &r.f[i];
+            if (fl->type == DRAPE_CLI_F_HIST || fl->type == DRAPE_CLI_F_SPECIMENS) continue;
+            kv[nkv++] = (drape_kv){fl->key, fl->type == DRAPE_CLI_F_STR && !fl->is_null_text
+                                                ? fl->text : NULL,
+                                   fl->type == DRAPE_CLI_F_STR ? NAN : fl->value};
+        }
         char diag[DRAPE_ERROR_MSG_MAX + 600];
         if (!sim_ok && err.kind != DRAPE_OK)
             kv[nkv++] = (drape_kv){"error", drape_error_format(&err, diag, sizeof diag), 0.0};
@@ -937,7 +635,7 @@ int drape_cli_run(int argc, char **argv)
                               NULL, 0};
         if (!method_static) {
             if (!(rk = drape_calloc(1, sizeof *rk))) goto nomem;
-            fill_run_kv(rk, scene_path, &s, &so, &res, rc.frame);
+            drape_cli_run_kv_fill(rk, scene_path, &s, &so, &res, rc.frame, stop_signal);
             fin.run = rk->kv;
             fin.n_run = rk->n;
         }
@@ -952,9 +650,29 @@ int drape_cli_run(int argc, char **argv)
         snprintf(p, sizeof p, "%s/drape.xmf", out_dir);
         unlink(p);
     }
-    if (csv) print_csv(stdout, &r);
-    else print_json(stdout, &r);
-    if (fflush(stdout) != 0) {
+    if (child) {
+        drape_cli_result_write(child->out, &r);
+        if (have_dc) {
+            int na = 0;
+            const double *rad = drape_dc_radii(dc, &na);
+            fprintf(child->out, "@shadow\t%.9g %.9g %d %.9g", sh.centre_m[0], sh.centre_m[1], na,
+                    sh.node_threshold_m);
+            for (int k = 0; k < na; k++) fprintf(child->out, " %.6g", rad[k]);
+            fputc('\n', child->out);
+        }
+    } else if (csv) {
+        drape_cli_result_print_csv(stdout, &r);
+    } else if (drape_cli_result_print_json(stdout, &r) != 0) {
+        goto nomem;
+    } else if (out_dir && have_dc && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE)) {
+        /* the picture of one specimen, as for an ensemble */
+        int na = 0;
+        const double *rad = drape_dc_radii(dc, &na);
+        drape_svg_specimen sv = {one.seed, one.dc, one.nodes, sh.centre_m[0], sh.centre_m[1],
+                                 rad, na, sh.node_threshold_m};
+        if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
+    }
+    if (fflush(child ? child->out : stdout) != 0) {
         drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");
         goto fail;
     }
@@ -999,4 +717,172 @@ out:
     if (ri) drape_h5_checkpoint_free(&ri->ck);
     drape_free(ri);
     return status;
+}
+
+int drape_cli_run(int argc, char **argv)
+{
+    enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
+           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
+           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP };
+    static const struct option opts[] = {
+        {"fabric", required_argument, NULL, O_FABRIC},
+        {"integrator", required_argument, NULL, O_INTEGRATOR},
+        {"rtol", required_argument, NULL, O_RTOL},
+        {"atol", required_argument, NULL, O_ATOL},
+        {"spacing", required_argument, NULL, O_SPACING},
+        {"energy-form", required_argument, NULL, O_FORM},
+        {"t-max", required_argument, NULL, O_TMAX},
+        {"out", required_argument, NULL, O_OUT},
+        {"max-steps", required_argument, NULL, O_MAXSTEPS},
+        {"max-order", required_argument, NULL, O_MAXORDER},
+        {"method", required_argument, NULL, O_METHOD},
+        {"linear-solver", required_argument, NULL, O_LINSOL},
+        {"strain-limit", required_argument, NULL, O_STRAIN},
+        {"resume", required_argument, NULL, O_RESUME},
+        {"specimens", required_argument, NULL, O_SPECIMENS},
+        {"jobs", required_argument, NULL, 'j'},
+        {"seed", required_argument, NULL, O_SEED},
+        {"fall-time", required_argument, NULL, O_FALLTIME},
+        {"fall-step", required_argument, NULL, O_FALLSTEP},
+        {"format", required_argument, NULL, O_FORMAT},
+        {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0}};
+    const char *fabric_path = NULL, *integrator = NULL, *form = NULL, *out_dir = NULL;
+    const char *resume_dir = NULL, *run_opt = NULL;
+    double rtol = 0, atol = 0, spacing = 0, t_max = 0, strain_limit = 0;
+    int csv = 0, quiet = 0, c;
+    long max_steps = 0;
+    int max_order = 0;
+    int method = DRAPE_METHOD_DEFAULT, linsol = 0;
+    run_args ra;
+    memset(&ra, 0, sizeof ra);
+    ra.jobs = 0; /* one per core */
+    while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
+        switch (c) {
+        case O_FABRIC: fabric_path = optarg; break;
+        case O_INTEGRATOR: integrator = optarg; break;
+        case O_RTOL:
+            if (parse_quantity("--rtol", optarg, DRAPE_DIM_NONE, &rtol)) return 2;
+            if (!(rtol > 0 && rtol < 1)) return usage_error("--rtol: must be in (0, 1), got %s%s", optarg, "");
+            break;
+        case O_ATOL:
+            if (parse_quantity("--atol", optarg, DRAPE_DIM_LENGTH, &atol)) return 2;
+            if (!(atol > 0)) return usage_error("--atol: must be positive, got %s%s", optarg, "");
+            break;
+        case O_SPACING:
+            if (parse_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, &spacing)) return 2;
+            if (!(spacing > 0)) return usage_error("--spacing: must be positive, got %s%s", optarg, "");
+            break;
+        case O_FORM: form = optarg; break;
+        case O_TMAX:
+            if (parse_quantity("--t-max", optarg, DRAPE_DIM_TIME, &t_max)) return 2;
+            if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
+            break;
+        case O_STRAIN:
+            if (parse_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, &strain_limit)) return 2;
+            if (!(strain_limit > 0) || !isfinite(strain_limit))
+                return usage_error("--strain-limit: must be a positive number, got %s%s", optarg, "");
+            break;
+        case O_OUT: out_dir = optarg; break;
+        case O_RESUME: resume_dir = optarg; break;
+        case O_LINSOL:
+            if (drape_linsol_parse(optarg, &linsol) != 0)
+                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'%s", optarg, "");
+            break;
+        case O_METHOD:
+            if (strcmp(optarg, "dynamic") == 0) method = DRAPE_METHOD_DYNAMIC;
+            else if (strcmp(optarg, "static") == 0) method = DRAPE_METHOD_STATIC;
+            else if (strcmp(optarg, "fall") == 0) method = DRAPE_METHOD_FALL;
+            else return usage_error("--method: expected fall, dynamic or static, got `%s'%s", optarg, "");
+            break;
+        case O_SPECIMENS:
+            if (parse_count(optarg, 1, DRAPE_SCENE_SPECIMENS_MAX, &ra.specimens) != 0)
+                return usage_error("--specimens: expected an integer from 1 to %s, got `%s'",
+                                   DRAPE_SCENE_SPECIMENS_MAX_TEXT, optarg);
+            break;
+        case 'j':
+            if (parse_count(optarg, 0, 4096, &ra.jobs) != 0)
+                return usage_error("-j: expected a number of processes from 0 (one per core) to %s, got `%s'",
+                                   "4096", optarg);
+            break;
+        case O_SEED: {
+            char *end;
+            errno = 0;
+            unsigned long v = strtoul(optarg, &end, 10);
+            if (errno || *end || optarg[0] == '-' || optarg[0] == 0)
+                return usage_error("--seed: expected a non-negative integer, got `%s'%s", optarg, "");
+            ra.has_seed = 1;
+            ra.seed = v;
+            break;
+        }
+        case O_FALLTIME:
+            if (parse_quantity("--fall-time", optarg, DRAPE_DIM_TIME, &ra.fall_time)) return 2;
+            if (!(ra.fall_time > 0)) return usage_error("--fall-time: must be positive, got %s%s", optarg, "");
+            break;
+        case O_FALLSTEP:
+            if (parse_quantity("--fall-step", optarg, DRAPE_DIM_TIME, &ra.fall_step)) return 2;
+            if (!(ra.fall_step > 0)) return usage_error("--fall-step: must be positive, got %s%s", optarg, "");
+            break;
+        case O_MAXSTEPS: {
+            char *end;
+            errno = 0;
+            max_steps = strtol(optarg, &end, 10);
+            if (errno || *end || max_steps <= 0)
+                return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
+            break;
+        }
+        case O_MAXORDER:
+            if (drape_max_order_parse(optarg, &max_order) != 0)
+                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'%s", optarg, "");
+            break;
+        case O_FORMAT:
+            if (strcmp(optarg, "json") == 0) csv = 0;
+            else if (strcmp(optarg, "csv") == 0) csv = 1;
+            else return usage_error("--format: expected json or csv, got `%s'%s", optarg, "");
+            break;
+        case 'q': quiet = 1; break;
+        case 'h': fputs(run_usage, stdout); return 0;
+        default:
+            fputs("Try `drape run --help'.\n", stderr);
+            return drape_error_exit_status(DRAPE_E_USAGE);
+        }
+        if (c != O_RESUME && c != O_FORMAT && c != 'q' && c != 'j') run_opt = argv[optind - 1];
+    }
+    if (argc - optind > 1) return usage_error("run: one scene at a time, got `%s' and `%s'", argv[optind], argv[optind + 1]);
+    if (resume_dir && optind < argc)
+        return usage_error("--resume: no scene file with it (the run's is stored in %s/drape.h5), got `%s'",
+                           resume_dir, argv[optind]);
+    if (resume_dir && run_opt)
+        return usage_error("--resume: only --format and -q go with it (the run's options are "
+                           "stored in %s/drape.h5), got `%s'", resume_dir, run_opt);
+    const char *scene_path = optind < argc ? argv[optind] : DEFAULT_SCENE;
+    if (integrator) {
+        int ok = 0;
+        for (int i = 0; drape_integrator_names[i]; i++)
+            ok |= strcmp(drape_integrator_names[i], integrator) == 0;
+        if (!ok) return usage_error("--integrator: unknown integrator `%s'%s; see `drape run --help'", integrator, "");
+    }
+    if (form && strcmp(form, "consistent") && strcmp(form, "seed"))
+        return usage_error("--energy-form: expected consistent or seed, got `%s'%s", form, "");
+
+    ra.scene_path = scene_path;
+    ra.fabric_path = fabric_path;
+    ra.integrator = integrator;
+    ra.form = form;
+    ra.out_dir = out_dir;
+    ra.resume_dir = resume_dir;
+    ra.rtol = rtol;
+    ra.atol = atol;
+    ra.spacing = spacing;
+    ra.t_max = t_max;
+    ra.strain_limit = strain_limit;
+    ra.max_steps = max_steps;
+    ra.max_order = max_order;
+    ra.method = method;
+    ra.linsol = linsol;
+    ra.csv = csv;
+    ra.quiet = quiet;
+    if (resume_dir) return drape_cli_run_one(&ra, NULL);
+    return drape_cli_specimens_run(&ra);
 }

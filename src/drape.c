@@ -427,6 +427,12 @@ static int rays_from(drape_dc *d, const GEOSGeometry *g, double *rmax,
 /* Prominent peaks of circular samples: see drape.h. */
 int drape_nodes_count(const double *r, int n, double min_prominence)
 {
+    return drape_nodes_find(r, n, min_prominence, NULL, 0);
+}
+
+int drape_nodes_find(const double *r, int n, double min_prominence, int *peaks,
+                     int max_peaks)
+{
     if (n < 3) return 0;
     int m0 = 0;
     for (int k = 1; k < n; k++)
@@ -459,7 +465,10 @@ int drape_nodes_count(const double *r, int n, double min_prominence)
                 if (v < lo_r) lo_r = v;
             }
             double prom = found ? h - (lo_l > lo_r ? lo_l : lo_r) : h - rmin;
-            if (prom > min_prominence) count++;
+            if (prom > min_prominence) {
+                if (peaks && count < max_peaks) peaks[count] = (m0 + (k + e) / 2) % n;
+                count++;
+            }
         }
         k = e + 1;
     }
@@ -506,6 +515,7 @@ int drape_dc_measure(drape_dc *d, const double *x, drape_shadow *out,
     out->r_max_m = rmax;
     double thr = d->opts.node_prominence * out->r_mean_m;
     if (d->opts.node_sigmas * L->sigma > thr) thr = d->opts.node_sigmas * L->sigma;
+    out->node_threshold_m = thr;
     out->nodes = drape_nodes_count(d->radii, na, thr);
     rc = 0;
 out:

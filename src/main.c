@@ -20,14 +20,19 @@ static const char usage_text[] =
     "  check FILE.yaml...   validate fabric and scene files and print an SI\n"
     "                       summary (masses, Kawabata curves, bending lengths,\n"
     "                       stiffness bounds)\n"
-    "  run [SCENE.yaml]     run a scene (default scenes/cusick.yaml); one JSON\n"
-    "                       object on stdout; `drape run --help` for options\n"
+    "  run [SCENE.yaml]     run a scene (default scenes/cusick.yaml: a drape\n"
+    "                       test of 10 specimens); one JSON object on stdout;\n"
+    "                       `drape run --help` for options\n"
     "  batch SCENE.yaml FABRIC.yaml...\n"
     "                       run a scene once per fabric, N at a time; one CSV\n"
     "                       row per fabric in DIR/results.csv (docs/batch.md)\n"
     "  import arcsim|kes FILE...\n"
     "                       write fabric files from ARCSim material JSON or a\n"
     "                       CSV table of KES-F summary values\n"
+    "  compare REF.json OTHER.json\n"
+    "                       are two drape tests (ensembles) distinguishable?\n"
+    "                       exact test of the node counts, Welch's test of\n"
+    "                       the mean DC (docs/ensemble.md)\n"
     "  bench [SCENE.yaml]   work-precision benchmark of the integrators (CSV:\n"
     "                       time, counters, error against a reference);\n"
     "                       --kernels: cost of one force and Jacobian\n"
@@ -52,22 +57,6 @@ static const char usage_text[] =
     "  130 interrupted by SIGINT (drape run: status `interrupted`, resumable\n"
     "      with --resume; drape batch: finished rows kept)\n"
     "  143 interrupted by SIGTERM (drape run, as above)\n";
-
-void drape_cli_print_error(const drape_error *e)
-{
-    char buf[2048];
-    fprintf(stderr, "drape: %s\n", drape_error_format(e, buf, sizeof buf));
-}
-
-void drape_cli_warn(void *ctx, const drape_error *w)
-{
-    (void)ctx;
-    char buf[2048];
-    drape_error tmp = *w;
-    tmp.msg[0] = 0; /* location and key only; the text follows "warning:" */
-    drape_error_format(&tmp, buf, sizeof buf);
-    fprintf(stderr, "drape: %swarning: %s\n", buf, w->msg);
-}
 
 /* drape is single-threaded by design: batch runs parallelise over
  * processes.  Debian's CHOLMOD runs its supernodal factorisation in OpenMP
@@ -125,6 +114,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "batch") == 0) return drape_cli_batch(sub_argc, sub_argv);
     if (strcmp(cmd, "import") == 0) return drape_cli_import(sub_argc, sub_argv);
     if (strcmp(cmd, "bench") == 0) return drape_cli_bench(sub_argc, sub_argv);
+    if (strcmp(cmd, "compare") == 0) return drape_cli_compare(sub_argc, sub_argv);
     if (strcmp(cmd, "help") == 0) { fputs(usage_text, stdout); return 0; }
     fprintf(stderr, "drape: unknown command `%s'\nTry `drape --help'.\n", cmd);
     return drape_error_exit_status(DRAPE_E_USAGE);

@@ -66,6 +66,9 @@ static const char *const kind_names[] = {"cusick", "hang", "table",
 static const char *const shape_names[] = {"rectangle", "circle", "strip",
                                           NULL};
 static const char *const form_names[] = {"consistent", "seed", NULL};
+
+/* drape_method order */
+const char *const drape_method_names[] = {"default", "dynamic", "static", "fall", NULL};
 static const char *const term_names[] = {"stretch", "bend", "shear",
                                          "gravity", NULL};
 static const char *const table_shape_names[] = {"square", "round", NULL};
@@ -745,7 +748,8 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
                         drape_scene *s)
 {
     static const char *const keys[] = {"integrator", "rtol", "atol",
-                                       "max_order", NULL};
+                                       "max_order", "method", "fall_time",
+                                       "fall_step", NULL};
     const drape_ynode *m = drape_ynode_get(root, "solver", NULL), *v;
     snprintf(s->integrator, sizeof s->integrator, "%s", "auto");
     s->rtol = SCENE_RTOL;
@@ -770,6 +774,20 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
             return -1;
         s->max_order = (int)k;
     }
+    if ((v = drape_ynode_get(m, "method", NULL)) != NULL) {
+        int k;
+        if (parse_enum(c, v, "solver.method", drape_method_names, &k))
+            return -1;
+        s->method = (drape_method)k;
+    }
+    if ((v = drape_ynode_get(m, "fall_time", NULL)) != NULL &&
+        parse_quantity(c, v, "solver.fall_time", DRAPE_DIM_TIME, "time",
+                       Q_POSITIVE, &s->fall_time))
+        return -1;
+    if ((v = drape_ynode_get(m, "fall_step", NULL)) != NULL &&
+        parse_quantity(c, v, "solver.fall_step", DRAPE_DIM_TIME, "time",
+                       Q_POSITIVE, &s->fall_step))
+        return -1;
     return 0;
 }
 
@@ -989,7 +1007,7 @@ static int parse_scene(const scene_ctx *c, drape_scene *s)
     static const char *const all[] = {
         "scene", "fabric", "description", "specimen", "spacing",
         "perturbation", "model", "damping", "solver", "end", "output",
-        "support", "table", "overhang", "pins", NULL};
+        "specimens", "support", "table", "overhang", "pins", NULL};
     static const key_owner owners[] = {{"support", "cusick scenes"},
                                        {"table", "table scenes"},
                                        {"overhang", "cantilever scenes"},
@@ -998,7 +1016,8 @@ static int parse_scene(const scene_ctx *c, drape_scene *s)
     /* Root keys allowed per kind: the common ones plus its own. */
     static const char *const common[] = {
         "scene", "fabric", "description", "specimen", "spacing",
-        "perturbation", "model", "damping", "solver", "end", "output", NULL};
+        "perturbation", "model", "damping", "solver", "end", "output",
+        "specimens", NULL};
     static const char *const own[] = {"support", "pins", "table", "overhang"};
     const char *allowed[16];
     const drape_ynode *root = c->doc->root, *v;
@@ -1027,6 +1046,15 @@ static int parse_scene(const scene_ctx *c, drape_scene *s)
                      Q_POSITIVE, "spacing: 1 cm", &s->spacing, &v))
         return -1;
     s->at_spacing = node_pos(v);
+    s->specimens = 1;
+    if ((v = drape_ynode_get(root, "specimens", NULL)) != NULL) {
+        long nsp;
+        if (parse_long(c, v, "specimens", "an integer from 1 to "
+                       DRAPE_SCENE_SPECIMENS_MAX_TEXT, 1,
+                       DRAPE_SCENE_SPECIMENS_MAX, &nsp))
+            return -1;
+        s->specimens = (int)nsp;
+    }
     switch (s->kind) {
     case DRAPE_SCENE_CUSICK:
         if (parse_support(c, root, s)) return -1;
@@ -1049,6 +1077,26 @@ static int parse_scene(const scene_ctx *c, drape_scene *s)
         parse_end(c, root, s) || parse_output(c, root, s))
         return -1;
     return 0;
+}
+
+void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s)
+{
+    double h;
+    switch (s->kind) {
+    case DRAPE_SCENE_CUSICK: h = 0.5 * (s->diameter - s->support_diameter); break;
+    case DRAPE_SCENE_TABLE: {
+        double w = s->shape == DRAPE_SHAPE_CIRCLE ? s->diameter : s->width;
+        double l = s->shape == DRAPE_SHAPE_CIRCLE ? s->diameter : s->height;
+        h = 0.5 * ((w > l ? w : l) - s->table_size);
+        break;
+    }
+    case DRAPE_SCENE_CANTILEVER: h = s->overhang; break;
+    default: h = s->shape == DRAPE_SHAPE_CIRCLE ? s->diameter : s->height; break;
+    }
+    if (!(h > 0.0)) h = s->spacing;
+    double tau = sqrt(h / DRAPE_G_STANDARD);
+    *time_s = s->fall_time > 0.0 ? s->fall_time : DRAPE_FALL_TIME_FACTOR * tau;
+    *step_s = s->fall_step > 0.0 ? s->fall_step : DRAPE_FALL_STEP_FACTOR * tau;
 }
 
 int drape_scene_load(const char *path, drape_scene *s, drape_error *err,

@@ -189,7 +189,7 @@ END_TEST
  * energy below the flat state's (0: gravity is measured from z = 0). */
 START_TEST(test_cusick_static_equilibrium)
 {
-    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --method static", out, CAP, err,
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --method static --specimens 1", out, CAP, err,
                                   CAP), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"status\": \"equilibrium\""));
     ck_assert_ptr_nonnull(strstr(out, "\"certified\": \"minimum\""));
@@ -215,15 +215,15 @@ END_TEST
  * an independent code path (Newton on the energy gradient, no time). */
 START_TEST(test_cusick_dynamic_equilibrium)
 {
-    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 2cm", out, CAP, err,
-                                  CAP), 0);
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 2cm --method dynamic "
+                                  "--specimens 1", out, CAP, err, CAP), 0);
     ck_assert_msg(strstr(out, "\"status\": \"equilibrium\""), "%s", out);
     ck_assert_ptr_nonnull(strstr(out, "\"integrator\": \"arkode-imex\""));
     double t_end = json_num(out, "t_end_s");
     ck_assert_msg(t_end > 0.2 && t_end < 20.0, "t_end_s = %g", t_end);
     ck_assert_double_lt(json_num(out, "mean_speed_m_s"), 1e-4);
     double dc_dyn = json_num(out, "dc");
-    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 2cm --method static",
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 2cm --method static --specimens 1",
                                   out, CAP, err, CAP), 0);
     double dc_static = json_num(out, "dc");
     ck_assert_msg(fabs(dc_dyn - dc_static) < 0.005, "dynamic DC %.6f, static %.6f", dc_dyn,
@@ -448,15 +448,15 @@ START_TEST(test_interrupt_static)
 {
     char dir[600];
     snprintf(dir, sizeof dir, "%s/static-interrupted", tu_scratch_dir());
-    const char *a[] = {"run", "-q", "../scenes/table.yaml", "--method", "static", "--out", dir,
-                       NULL};
+    const char *a[] = {"run", "-q", "../scenes/table.yaml", "--method", "static", "--specimens",
+                       "1", "--out", dir, NULL};
     int code = run_and_signal(NULL, SIGTERM, a);
     ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
     ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
     ck_assert_msg(strstr(err, "during the static solve; nothing written"), "%s", err);
     ck_assert_msg(access(dir, F_OK) != 0, "%s was left behind", dir);
     double it_stopped = json_num(out, "iterations");
-    ck_assert_int_eq(tu_run_drape("run -q ../scenes/table.yaml --method static", out, CAP, err,
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/table.yaml --method static --specimens 1", out, CAP, err,
                                   CAP),
                      0);
     ck_assert_msg(strstr(out, "\"status\": \"equilibrium\""), "%s", out);

@@ -59,6 +59,7 @@ typedef struct drape_shadow {
     double r_min_m, r_max_m;      /* shadow's outer radius, min and max */
     double r_mean_m;              /* mean of the sampled r(theta) */
     double centre_m[2];           /* centre of the rays (x, y) */
+    double node_threshold_m;      /* the prominence a node must exceed, m */
 } drape_shadow;
 
 typedef struct drape_dc drape_dc;
@@ -104,6 +105,10 @@ int drape_union_area(drape_dc *d, const double *tri, int n_tri, double *area,
  * sample counts as higher, so one of twin peaks keeps the prominence).
  * Constant r: 0. */
 int drape_nodes_count(const double *r, int n, double min_prominence);
+/* The same, and the sample index of each node (the middle of a plateau)
+ * in peaks[0..max_peaks) (peaks may be NULL); returns the count. */
+int drape_nodes_find(const double *r, int n, double min_prominence, int *peaks,
+                     int max_peaks);
 
 /* ---- cantilever --------------------------------------------------------
  * The strip's length runs along +x; the platform edge is the line x = 0,

@@ -31,6 +31,8 @@
 #ifndef DRAPE_OUTPUT_H
 #define DRAPE_OUTPUT_H
 
+#include <stdio.h>
+
 #include "drape/error.h"
 #include "drape/lattice.h"
 #include "drape/model.h"
@@ -144,5 +146,43 @@ const drape_kv *drape_kv_find(const drape_kv *kv, int n, const char *key);
  * times, energies; same number of particles) to h, in order: a resumed
  * run keeps the frames of the interrupted one.  0 or -1 with err set. */
 int drape_h5_copy_frames(drape_h5 *h, const char *path, drape_error *err);
+
+/* ---- shadow picture (output_svg.c; issue 15) ------------------------------ */
+
+/* One specimen's shadow outline: its outer radius r[k] at angle
+ * theta_k = 2 pi k / n around (cx, cy) (drape_dc_radii), m. */
+typedef struct drape_svg_specimen {
+    unsigned long seed;
+    double dc;          /* NaN: the specimen failed (no outline drawn) */
+    int nodes;
+    double cx, cy;
+    const double *r;    /* borrowed; NULL when failed */
+    int n;
+    double node_threshold_m; /* prominence of a node (drape_shadow) */
+} drape_svg_specimen;
+
+/* What the picture shows besides the outlines. */
+typedef struct drape_svg_scene {
+    const char *title;        /* first legend line, e.g. fabric and scene */
+    int table;                /* 0: Cusick (circle on a disk), 1: table */
+    double specimen_d_m;      /* Cusick: specimen diameter */
+    double support_d_m;       /* Cusick: support disk diameter */
+    double width_m, height_m; /* table: the rectangle */
+    int table_round;          /* table: 1 round, 0 square */
+    double table_size_m;      /* table: side or diameter */
+    double dc_mean, dc_ci95;  /* NaN when unknown */
+    int n_failed;
+    const int *hist;          /* node histogram, hist_n bins */
+    int hist_n;
+} drape_svg_scene;
+
+/* Write the top view as SVG 1.1 to f: the specimen's outline at rest
+ * (dashed), the support disk or table top (grey), each specimen's shadow
+ * as one <polygon class="shadow"> (data-seed, data-dc, data-nodes), its
+ * nodes as small circles, and a legend with the mean DC +- its 95 %
+ * half-width and the node histogram.  Returns 0, or -1 when f reports a
+ * write error. */
+int drape_svg_shadow_write(FILE *f, const drape_svg_scene *sc,
+                           const drape_svg_specimen *sp, int n);
 
 #endif /* DRAPE_OUTPUT_H */

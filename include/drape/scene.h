@@ -42,6 +42,23 @@ enum {
     DRAPE_TERM_ALL = 0xfu
 };
 
+/* How a run finds its result (solver.method, --method). */
+typedef enum drape_method {
+    DRAPE_METHOD_DEFAULT, /* not given: fall for scenes that end at
+                             equilibrium, dynamic for the others */
+    DRAPE_METHOD_DYNAMIC, /* the equations of motion in time (integrator) */
+    DRAPE_METHOD_STATIC,  /* minimise E_pot from the flat state (equilibrium.h) */
+    DRAPE_METHOD_FALL     /* a short damped large-step fall, then the static
+                             solver (equilibrium.h, dyn_time; docs/ensemble.md) */
+} drape_method;
+
+/* "default", "dynamic", "static", "fall", NULL */
+extern const char *const drape_method_names[];
+
+/* Repeated specimens (MODEL.md 6): at most this many per run. */
+#define DRAPE_SCENE_SPECIMENS_MAX 1000
+#define DRAPE_SCENE_SPECIMENS_MAX_TEXT "1000"
+
 typedef enum drape_table_shape { DRAPE_TABLE_SQUARE, DRAPE_TABLE_ROUND } drape_table_shape;
 
 /* Where a key was written in the scene file (1-based; 0 if unknown or
@@ -86,6 +103,11 @@ typedef struct drape_scene {
     char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* default "auto" */
     double rtol, atol;             /* defaults 1e-4, 1e-7 */
     int max_order;                 /* solver.max_order (1-5), 0 = integrator's default */
+    drape_method method;           /* solver.method; DEFAULT when not given */
+    double fall_time, fall_step;   /* solver.fall_time, fall_step, s; 0 = the
+                                      fall method's defaults */
+    int specimens;                 /* specimens: repeated specimens with seeds
+                                      seed, seed + 1, ... (default 1) */
 
     int has_equilibrium;
     double eq_speed;               /* m/s (default 1e-4) */
@@ -131,6 +153,18 @@ int drape_scene_load_flags(const char *path, unsigned flags, drape_scene *s,
  * scene file and key. */
 int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
                                   drape_error *err);
+
+/* The fall method's time and step (solver.fall_time, fall_step, or their
+ * defaults from the scene's geometry; docs/ensemble.md):
+ *     t_fall = DRAPE_FALL_TIME_FACTOR sqrt(h / g),
+ *     h_step = DRAPE_FALL_STEP_FACTOR sqrt(h / g),
+ * h the length that hangs free (Cusick: (D - d)/2; table: the longest
+ * overhang; cantilever: the overhang; hang: the specimen's height), so
+ * that scenes of another size fall for the same number of pendulum
+ * times of their skirt. */
+#define DRAPE_FALL_TIME_FACTOR 10.0
+#define DRAPE_FALL_STEP_FACTOR 0.03125
+void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s);
 
 /* Names for output. */
 const char *drape_scene_kind_name(drape_scene_kind k);

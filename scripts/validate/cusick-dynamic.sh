@@ -43,7 +43,7 @@ trap 'rm -f "$table" "$table.row" "$table.doc" "$table.json"' EXIT
 for sp in $SPACINGS; do
     for form in $FORMS; do
         rc=0
-        /usr/bin/time -f %U -o "$table.row" timeout "$TIMEOUT" "$DRAPE_BIN" run scenes/cusick.yaml \
+        /usr/bin/time -f %U -o "$table.row" timeout "$TIMEOUT" "$DRAPE_BIN" run scenes/cusick.yaml --method dynamic --specimens 1 \
             --spacing "$sp" --energy-form "$form" -q > "$table.json" || rc=$?
         cpu=$(tail -n 1 "$table.row")
         if [ "$rc" -ne 0 ]; then

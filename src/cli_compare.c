@@ -1,0 +1,165 @@
+/* cli_compare.c: `drape compare REFERENCE.json OTHER.json`: are two drape
+ * tests (results of `drape run`, one JSON object each, usually ensembles
+ * of repeated specimens) distinguishable?  Prints one JSON object:
+ *
+ *   p_nodes      exact test of the two node-count histograms (Freeman-
+ *                Halton, ensemble.h): small p = different distributions
+ *   p_mean       Welch's t test of the mean DCs
+ *   dc_diff      OTHER's mean DC minus REFERENCE's
+ *   dc_in_ci95   1 when |dc_diff| <= REFERENCE's dc_ci95
+ *   cpu_ratio    REFERENCE's CPU seconds per specimen / OTHER's
+ *
+ * and the inputs' n, dc, dc_ci95, nodes_hist.  Issue 15 item 3 judges a
+ * fast method against the accurate one by exactly these numbers
+ * (docs/ensemble.md).  Exit status 0, or 1/3 for unreadable input.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <json-c/json.h>
+
+#include "cli.h"
+#include "cli_io.h"
+#include "drape/alloc.h"
+#include "drape/ensemble.h"
+#include "drape/scene.h"
+
+static const char compare_usage[] =
+    "Usage: drape compare REFERENCE.json OTHER.json\n"
+    "\n"
+    "Compare two drape tests: the results of `drape run` (one JSON object\n"
+    "each, e.g. ensembles of --specimens N).  Prints one JSON object with\n"
+    "p_nodes (exact test of the node-count histograms), p_mean (Welch's t test\n"
+    "of the mean DCs), dc_diff (OTHER - REFERENCE), dc_in_ci95 (|dc_diff| within\n"
+    "REFERENCE's 95 % half-width), cpu_ratio (REFERENCE's CPU seconds per\n"
+    "specimen over OTHER's) and both inputs' n, dc, dc_sd, dc_ci95, nodes_hist,\n"
+    "cpu_per_specimen_s.  A p value below 0.05 means the two differ at the\n"
+    "5 % level (docs/ensemble.md).\n"
+    "\n"
+    "Exit status: 0 success, 1 a file is not a drape result, 2 bad command\n"
+    "line, 3 a file cannot be read.\n";
+
+typedef struct side {
+    drape_ensemble_stats st;
+    double cpu_per;
+    json_object *hist;
+} side;
+
+static double num(json_object *o, const char *key)
+{
+    json_object *v;
+    if (!json_object_object_get_ex(o, key, &v) || !v) return NAN;
+    return json_object_get_double(v);
+}
+
+/* The statistics of a result, from its specimens array (or, for a result
+ * of one specimen written before ensembles, from dc and nodes). */
+static int load(const char *path, side *s, json_object **keep, drape_error *err)
+{
+    char *text = drape_cli_read_file(path, (size_t)64 << 20, NULL, err);
+    if (!text) return -1;
+    json_object *o = json_tokener_parse(text);
+    drape_free(text);
+    if (!o || !json_object_is_type(o, json_type_object)) {
+        if (o) json_object_put(o);
+        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, NULL,
+                               "not one JSON object (the output of `drape run`)");
+    }
+    *keep = o;
+    json_object *sp;
+    int n = 0;
+    double dcs[DRAPE_SCENE_SPECIMENS_MAX];
+    int nodes[DRAPE_SCENE_SPECIMENS_MAX];
+    if (json_object_object_get_ex(o, "specimens", &sp) && json_object_is_type(sp, json_type_array)) {
+        int m = (int)json_object_array_length(sp);
+        for (int k = 0; k < m && n < DRAPE_SCENE_SPECIMENS_MAX; k++) {
+            json_object *e = json_object_array_get_idx(sp, (size_t)k);
+            double dc = num(e, "dc"), nd = num(e, "nodes");
+            dcs[n] = dc;
+            nodes[n] = isfinite(nd) ? (int)nd : -1;
+            n++;
+        }
+    } else if (isfinite(num(o, "dc"))) {
+        dcs[0] = num(o, "dc");
+        nodes[0] = isfinite(num(o, "nodes")) ? (int)num(o, "nodes") : -1;
+        n = 1;
+    }
+    drape_ensemble_stats_compute(dcs, nodes, n, &s->st);
+    if (s->st.n == 0)
+        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, "specimens",
+                               "no specimen with a drape coefficient");
+    s->cpu_per = num(o, "cpu_s") / (n > 0 ? n : 1);
+    return 0;
+}
+
+static json_object *dnum(double v)
+{
+    if (!isfinite(v)) return NULL;
+    char b[40];
+    snprintf(b, sizeof b, "%.6g", v);
+    return json_object_new_double_s(v, b);
+}
+
+static json_object *side_json(const side *s)
+{
+    json_object *o = json_object_new_object(), *h = json_object_new_object();
+    json_object_object_add(o, "n", json_object_new_int(s->st.n));
+    json_object_object_add(o, "dc", dnum(s->st.dc_mean));
+    json_object_object_add(o, "dc_sd", dnum(s->st.dc_sd));
+    json_object_object_add(o, "dc_ci95", dnum(s->st.dc_ci95));
+    json_object_object_add(o, "nodes", json_object_new_int(s->st.nodes_mode));
+    for (int k = 0; k <= DRAPE_ENSEMBLE_MAX_NODES; k++) {
+        if (!s->st.hist[k]) continue;
+        char key[16];
+        snprintf(key, sizeof key, "%d", k);
+        json_object_object_add(h, key, json_object_new_int(s->st.hist[k]));
+    }
+    json_object_object_add(o, "nodes_hist", h);
+    json_object_object_add(o, "cpu_per_specimen_s", dnum(s->cpu_per));
+    return o;
+}
+
+int drape_cli_compare(int argc, char **argv)
+{
+    if (argc == 2 && (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0)) {
+        fputs(compare_usage, stdout);
+        return 0;
+    }
+    if (argc != 3) {
+        fputs("drape: compare: expected two result files\nTry `drape compare --help'.\n", stderr);
+        return drape_error_exit_status(DRAPE_E_USAGE);
+    }
+    drape_error err;
+    drape_error_clear(&err);
+    side a, b;
+    json_object *ja = NULL, *jb = NULL;
+    int status = 0;
+    if (load(argv[1], &a, &ja, &err) != 0 || load(argv[2], &b, &jb, &err) != 0) {
+        drape_cli_print_error(&err);
+        status = drape_error_exit_status(err.kind);
+        goto out;
+    }
+    double diff = b.st.dc_mean - a.st.dc_mean;
+    json_object *o = json_object_new_object();
+    json_object_object_add(o, "p_nodes",
+                           dnum(drape_ensemble_exact_p(a.st.hist, b.st.hist,
+                                                       DRAPE_ENSEMBLE_MAX_NODES + 1)));
+    json_object_object_add(o, "p_mean", dnum(drape_ensemble_welch_p(&a.st, &b.st)));
+    json_object_object_add(o, "dc_diff", dnum(diff));
+    json_object_object_add(o, "dc_in_ci95",
+                           isfinite(a.st.dc_ci95) ? json_object_new_int(fabs(diff) <= a.st.dc_ci95)
+                                                  : NULL);
+    json_object_object_add(o, "cpu_ratio", dnum(a.cpu_per / b.cpu_per));
+    json_object_object_add(o, "reference", side_json(&a));
+    json_object_object_add(o, "other", side_json(&b));
+    printf("%s\n", json_object_to_json_string_ext(o, JSON_C_TO_STRING_SPACED |
+                                                      JSON_C_TO_STRING_NOSLASHESCAPE));
+    json_object_put(o);
+    if (fflush(stdout) != 0) status = drape_error_exit_status(DRAPE_E_IO);
+out:
+    if (ja) json_object_put(ja);
+    if (jb) json_object_put(jb);
+    return status;
+}

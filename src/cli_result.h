@@ -1,0 +1,83 @@
+/* cli_result.h: the result of `drape run` as a list of named fields, and
+ * its three forms: JSON on stdout (built with json-c), a CSV header and
+ * row (`--format csv`, batch's results.csv), and the line format an
+ * ensemble's child process sends its parent (cli_specimens.c).
+ * Private to src/cli_*.c.
+ *
+ * Keys are those of drape_cli_run_keys, in that order.  A key
+ * "energy_J.kinetic" nests in JSON (energy_J: {kinetic: ...}) and is
+ * flattened with '_' in CSV.  Two keys are structured: nodes_hist (JSON
+ * object {"3": 2, "4": 6}; CSV "3:2;4:6") and specimens (JSON array of
+ * one object per specimen; CSV the count).
+ */
+#ifndef DRAPE_CLI_RESULT_H
+#define DRAPE_CLI_RESULT_H
+
+#include <stdio.h>
+
+#include "drape/ensemble.h"
+
+#define DRAPE_CLI_RESULT_MAX 72
+#define DRAPE_CLI_TEXT_MAX 128
+
+typedef enum drape_cli_ftype {
+    DRAPE_CLI_F_NUM,       /* double, NaN = null */
+    DRAPE_CLI_F_INT,       /* integer in a double; NaN or < 0 = null */
+    DRAPE_CLI_F_STR,       /* text (copied) */
+    DRAPE_CLI_F_HIST,      /* the node histogram of the result */
+    DRAPE_CLI_F_SPECIMENS  /* the specimens of the result */
+} drape_cli_ftype;
+
+/* One specimen's line in the `specimens` array. */
+typedef struct drape_cli_specimen {
+    unsigned long seed;
+    char status[16];   /* equilibrium, t_max, failed, interrupted */
+    double dc;         /* NaN if none */
+    int nodes;         /* -1 if none */
+    double r_min_m, r_max_m, cpu_s;
+} drape_cli_specimen;
+
+typedef struct drape_cli_field {
+    char key[48];                    /* "energy_J.kinetic" nests in JSON */
+    drape_cli_ftype type;
+    double value;
+    char text[DRAPE_CLI_TEXT_MAX];
+    int is_null_text;                /* STR: print null */
+} drape_cli_field;
+
+typedef struct drape_cli_result {
+    drape_cli_field f[DRAPE_CLI_RESULT_MAX];
+    int n;
+    int hist[DRAPE_ENSEMBLE_MAX_NODES + 1];   /* for DRAPE_CLI_F_HIST */
+    drape_cli_specimen *spec;                /* for DRAPE_CLI_F_SPECIMENS (borrowed) */
+    int n_spec;
+} drape_cli_result;
+
+void drape_cli_result_num(drape_cli_result *r, const char *key, double v);
+void drape_cli_result_int(drape_cli_result *r, const char *key, double v);
+/* s NULL prints null */
+void drape_cli_result_str(drape_cli_result *r, const char *key, const char *s);
+void drape_cli_result_hist(drape_cli_result *r, const char *key);
+void drape_cli_result_specimens(drape_cli_result *r, const char *key);
+
+/* The field named key, or NULL. */
+drape_cli_field *drape_cli_result_find(drape_cli_result *r, const char *key);
+/* Its number (NaN when absent, null or text). */
+double drape_cli_result_get(const drape_cli_result *r, const char *key);
+
+/* 1 if the fields are exactly drape_cli_run_keys, in order. */
+int drape_cli_result_check_keys(const drape_cli_result *r);
+
+/* JSON (one line) and CSV (header and row).  Return 0, or -1 when the
+ * JSON cannot be built (out of memory). */
+int drape_cli_result_print_json(FILE *out, const drape_cli_result *r);
+void drape_cli_result_print_csv(FILE *out, const drape_cli_result *r);
+
+/* The child-to-parent line format: "key\ttype\tvalue\n" per field (numbers
+ * with %.17g, so nothing is lost), structured fields left out.
+ * drape_cli_result_read parses it into r (keys matched against
+ * drape_cli_run_keys); returns 0, or -1 on a malformed line. */
+void drape_cli_result_write(FILE *out, const drape_cli_result *r);
+int drape_cli_result_read(const char *text, drape_cli_result *r);
+
+#endif /* DRAPE_CLI_RESULT_H */

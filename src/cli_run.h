@@ -1,0 +1,56 @@
+/* cli_run.h: `drape run` between its files: the options of one run
+ * (cli_run.c), the single specimen (cli_run.c), the ensemble of repeated
+ * specimens over child processes and its picture (cli_specimens.c).
+ * Private to src/cli_*.c. */
+#ifndef DRAPE_CLI_RUN_H
+#define DRAPE_CLI_RUN_H
+
+#include <stdio.h>
+
+#include "cli_result.h"
+#include "drape/error.h"
+#include "drape/output.h"
+#include "drape/scene.h"
+
+/* The command line of `drape run`, parsed (0 / NULL = not given: the
+ * scene's value). */
+typedef struct run_args {
+    const char *scene_path, *fabric_path, *integrator, *form, *out_dir, *resume_dir;
+    double rtol, atol, spacing, t_max, strain_limit;
+    long max_steps;
+    int max_order, linsol, method; /* method: drape_method */
+    int csv, quiet;
+    int has_seed;
+    unsigned long seed;       /* --seed: perturbation.seed */
+    double fall_time, fall_step; /* s */
+    int specimens;            /* --specimens; 0 = the scene's */
+    int jobs;                 /* -j: processes at once; 0 = one per core */
+    int no_warnings;          /* the loaders' warnings are not printed (an
+                                 ensemble's specimens after the first) */
+} run_args;
+
+/* In an ensemble's child process: where the result goes instead of stdout
+ * (drape_cli_result_write lines and an "@shadow" line). */
+typedef struct run_child {
+    FILE *out;
+} run_child;
+
+/* One specimen: load, build, run, measure, write frames, print the result
+ * (child NULL) or send it to the parent.  Returns the exit status. */
+int drape_cli_run_one(const run_args *a, run_child *child);
+
+/* The run as the scene and options ask: one specimen in this process, or
+ * N specimens in child processes (seeds seed + k), -j at a time, and
+ * their statistics.  Returns the exit status. */
+int drape_cli_specimens_run(const run_args *a);
+
+/* Write DIR/shadow.svg: the top view of the specimens' shadows (scene s,
+ * n specimens), with the result r's statistics in its legend. */
+int drape_cli_write_shadow(const char *dir, const drape_scene *s,
+                           const drape_svg_specimen *sp, int n,
+                           const drape_cli_result *r, drape_error *err);
+
+/* CPU seconds of this process and its waited-for children. */
+double drape_cli_cpu_s(void);
+
+#endif /* DRAPE_CLI_RUN_H */

@@ -1,0 +1,550 @@
+/* cli_specimens.c: repeated specimens (issue 15; MODEL.md 6; docs/ensemble.md).
+ *
+ * A drape test of N specimens is a loop over single runs above the single
+ * run: specimen k = 0 .. N-1 is the scene with perturbation seed
+ * seed + k, run by drape_cli_run_one in a child process (fork, no exec),
+ * at most -j at a time.  A child sends its result fields and its shadow's
+ * sampled outline through a pipe (cli_result.h's line format); the parent
+ * collects them, reads each child's CPU time from wait4, computes the
+ * statistics (ensemble.h), prints one result and draws DIR/shadow.svg.
+ *
+ * The ensemble's keys: dc is the mean DC, nodes the modal node count,
+ * dc_sd, dc_ci95, dc_mode, nodes_hist, specimens (one object per
+ * specimen), specimens_failed, cpu_s (this process and its children).
+ * Other keys combine the specimens' values by the rule in key_rules:
+ * the same for all (inputs), mean (geometry, energies), largest (times,
+ * strains, residuals), smallest (certification margins) or sum (solver
+ * counters).  Failed specimens are counted and left out of every
+ * statistic; the run fails (exit 4) only when none produced a result.
+ * SIGINT/SIGTERM: no new specimen starts, the running ones stop at their
+ * next evaluation (they are sent the signal too), the result says
+ * status interrupted and exits 128 + the signal; an ensemble cannot be
+ * resumed (its specimens are short).
+ */
+#include "cli_run.h"
+
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/time.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "cli_io.h"
+#include "drape/alloc.h"
+#include "drape/ensemble.h"
+
+double drape_cli_cpu_s(void)
+{
+    struct rusage a, b;
+    getrusage(RUSAGE_SELF, &a);
+    getrusage(RUSAGE_CHILDREN, &b);
+    return (double)(a.ru_utime.tv_sec + a.ru_stime.tv_sec + b.ru_utime.tv_sec +
+                    b.ru_stime.tv_sec) +
+           1e-6 * (double)(a.ru_utime.tv_usec + a.ru_stime.tv_usec + b.ru_utime.tv_usec +
+                           b.ru_stime.tv_usec);
+}
+
+/* ---- how the specimens' values combine ------------------------------------ */
+
+enum { R_SAME, R_MEAN, R_MAX, R_MIN, R_SUM, R_OWN };
+
+typedef struct key_rule {
+    const char *key;
+    int rule;
+} key_rule;
+
+/* Keys not listed are R_SAME (the value of the first specimen with a
+ * result: the inputs and the lattice). */
+static const key_rule key_rules[] = {
+    {"status", R_OWN}, {"t_end_s", R_MAX}, {"dc", R_OWN}, {"nodes", R_OWN},
+    {"r_min_m", R_MEAN}, {"r_max_m", R_MEAN}, {"tip_angle_deg", R_MEAN},
+    {"bending_length_m", R_MEAN}, {"flexural_rigidity_Nm", R_MEAN},
+    {"energy_J_kinetic", R_MEAN}, {"energy_J_stretch", R_MEAN}, {"energy_J_bend", R_MEAN},
+    {"energy_J_shear", R_MEAN}, {"energy_J_gravity", R_MEAN}, {"max_strain", R_MAX},
+    {"wall_s", R_OWN}, {"steps", R_SUM}, {"rhs_evals", R_SUM}, {"jac_evals", R_SUM},
+    {"lin_setups", R_SUM}, {"nonlin_iters", R_SUM}, {"err_test_fails", R_SUM},
+    {"conv_fails", R_SUM}, {"max_speed_m_s", R_MAX}, {"iterations", R_SUM},
+    {"factorizations", R_SUM}, {"certified", R_OWN}, {"min_pivot_N_m", R_MIN},
+    {"omega_min_rad_s", R_MIN}, {"max_force_rel", R_MAX}, {"lin_iters", R_SUM},
+    {"lin_factors", R_SUM}, {"mean_speed_m_s", R_MAX}, {"integrator_switches", R_SUM},
+    {"cpu_s", R_OWN}, {"dc_sd", R_OWN}, {"dc_ci95", R_OWN}, {"dc_mode", R_OWN},
+    {"nodes_hist", R_OWN}, {"specimens", R_OWN}, {"specimens_failed", R_OWN},
+    {"seed", R_OWN}, {NULL, 0}};
+
+static int rule_of(const char *key)
+{
+    for (int i = 0; key_rules[i].key; i++)
+        if (strcmp(key_rules[i].key, key) == 0) return key_rules[i].rule;
+    return R_SAME;
+}
+
+/* ---- one child ------------------------------------------------------------- */
+
+typedef struct child {
+    pid_t pid;
+    int fd;              /* read end of its pipe */
+    int k;               /* specimen index */
+    char *buf;           /* what it sent */
+    size_t len, cap;
+    int done, exit_status;
+    double cpu_s;
+    drape_cli_result res;
+    int have_res;
+    double *radii;       /* its shadow outline, n_radii samples */
+    int n_radii;
+    double cx, cy, thr;
+} child;
+
+static volatile sig_atomic_t ens_stop;
+
+static void on_signal(int sig)
+{
+    ens_stop = sig;
+}
+
+static int launch(const run_args *a, child *c, unsigned long seed, const char *out_dir)
+{
+    int fds[2];
+    if (pipe(fds) != 0) return -1;
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fds[0]);
+        close(fds[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        close(fds[0]);
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        char ctx[96];
+        snprintf(ctx, sizeof ctx, "specimen %d (seed %lu): ", c->k + 1, seed);
+        drape_cli_set_error_context(ctx);
+        run_args ca = *a;
+        ca.has_seed = 1;
+        ca.seed = seed;
+        ca.quiet = 1;
+        ca.specimens = 1;
+        ca.no_warnings = c->k > 0; /* the first specimen prints them once */
+        char dir[4200];
+        if (out_dir) {
+            snprintf(dir, sizeof dir, "%s/specimen-%03d", out_dir, c->k + 1);
+            ca.out_dir = dir;
+        }
+        FILE *o = fdopen(fds[1], "w");
+        int st = 70;
+        if (o) {
+            run_child ch = {o};
+            st = drape_cli_run_one(&ca, &ch);
+            if (fclose(o) != 0 && st == 0) st = 3;
+        }
+        fflush(stderr);
+        _exit(st);
+    }
+    close(fds[1]);
+    c->pid = pid;
+    c->fd = fds[0];
+    return 0;
+}
+
+/* Read everything the child sent (it has exited, so the pipe ends). */
+static int drain(child *c)
+{
+    for (;;) {
+        if (c->cap - c->len < 4096) {
+            size_t cap = c->cap ? 2 * c->cap : 16384;
+            char *b = drape_realloc(c->buf, cap);
+            if (!b) return -1;
+            c->buf = b;
+            c->cap = cap;
+        }
+        ssize_t r = read(c->fd, c->buf + c->len, c->cap - c->len - 1);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) break;
+        c->len += (size_t)r;
+    }
+    if (c->buf) c->buf[c->len] = 0;
+    close(c->fd);
+    c->fd = -1;
+    return 0;
+}
+
+/* Split the "@shadow" line off and parse both parts. */
+static void parse_child(child *c)
+{
+    if (!c->buf) return;
+    char *sh = strstr(c->buf, "@shadow\t");
+    if (sh) {
+        *sh = 0;
+        char *p = sh + 8, *end;
+        c->cx = strtod(p, &end);
+        c->cy = strtod(end, &end);
+        long n = strtol(end, &end, 10);
+        c->thr = strtod(end, &end);
+        if (n > 0 && n < 100000 && (c->radii = drape_calloc((size_t)n, sizeof(double)))) {
+            int k = 0;
+            for (; k < n; k++) {
+                char *e2;
+                c->radii[k] = strtod(end, &e2);
+                if (e2 == end) break;
+                end = e2;
+            }
+            c->n_radii = k == n ? (int)n : 0;
+        }
+    }
+    c->have_res = drape_cli_result_read(c->buf, &c->res) == 0 && c->res.n > 0;
+}
+
+/* ---- the ensemble's result ---------------------------------------------------- */
+
+static int spec_ok(const child *c)
+{
+    if (!c->have_res) return 0;
+    const drape_cli_field *f = drape_cli_result_find((drape_cli_result *)&c->res, "status");
+    return f && f->type == DRAPE_CLI_F_STR &&
+           (strcmp(f->text, "equilibrium") == 0 || strcmp(f->text, "t_max") == 0);
+}
+
+static const char *spec_status(const child *c)
+{
+    const drape_cli_field *f =
+        c->have_res ? drape_cli_result_find((drape_cli_result *)&c->res, "status") : NULL;
+    return f && f->type == DRAPE_CLI_F_STR ? f->text : "failed";
+}
+
+static void combine(drape_cli_result *out, const char *key, const drape_cli_field *proto,
+                    child *ch, int n, int rule)
+{
+    double acc = NAN;
+    int cnt = 0;
+    for (int k = 0; k < n; k++) {
+        if (!spec_ok(&ch[k])) continue;
+        double v = drape_cli_result_get(&ch[k].res, key);
+        if (!isfinite(v) || (proto->type == DRAPE_CLI_F_INT && v < 0)) continue;
+        if (cnt == 0) acc = v;
+        else if (rule == R_MEAN || rule == R_SUM) acc += v;
+        else if (rule == R_MAX && v > acc) acc = v;
+        else if (rule == R_MIN && v < acc) acc = v;
+        cnt++;
+    }
+    if (rule == R_MEAN && cnt > 0) acc /= cnt;
+    if (proto->type == DRAPE_CLI_F_INT) drape_cli_result_int(out, key, acc);
+    else drape_cli_result_num(out, key, acc);
+}
+
+static void build_result(drape_cli_result *r, child *ch, int n, const child *first,
+                         const drape_ensemble_stats *st, int n_failed, int interrupted,
+                         double wall_s, unsigned long seed0, drape_cli_specimen *spec)
+{
+    memset(r, 0, sizeof *r);
+    int all_eq = 1, n_ok = 0, all_min = 1, any_cert = 0;
+    for (int k = 0; k < n; k++) {
+        if (!spec_ok(&ch[k])) continue;
+        n_ok++;
+        if (strcmp(spec_status(&ch[k]), "equilibrium") != 0) all_eq = 0;
+        const drape_cli_field *c = drape_cli_result_find(&ch[k].res, "certified");
+        if (c && c->type == DRAPE_CLI_F_STR && !c->is_null_text) {
+            any_cert = 1;
+            if (strcmp(c->text, "minimum") != 0) all_min = 0;
+        }
+    }
+    for (int i = 0; drape_cli_run_keys[i]; i++) {
+        const char *key = drape_cli_run_keys[i];
+        /* the nested JSON name of energy_J_* */
+        char jkey[48];
+        if (strncmp(key, "energy_J_", 9) == 0) snprintf(jkey, sizeof jkey, "energy_J.%s", key + 9);
+        else snprintf(jkey, sizeof jkey, "%s", key);
+        const drape_cli_field *proto =
+            first ? drape_cli_result_find((drape_cli_result *)&first->res, key) : NULL;
+        int rule = rule_of(key);
+        if (strcmp(key, "status") == 0) {
+            drape_cli_result_str(r, jkey, interrupted ? "interrupted"
+                                          : n_ok == 0  ? "failed"
+                                          : all_eq     ? "equilibrium"
+                                                       : "t_max");
+        } else if (strcmp(key, "dc") == 0) {
+            drape_cli_result_num(r, jkey, st->dc_mean);
+        } else if (strcmp(key, "nodes") == 0) {
+            drape_cli_result_int(r, jkey, st->nodes_mode);
+        } else if (strcmp(key, "wall_s") == 0) {
+            drape_cli_result_num(r, jkey, wall_s);
+        } else if (strcmp(key, "certified") == 0) {
+            drape_cli_result_str(r, jkey, !any_cert ? NULL : all_min ? "minimum" : "saddle");
+        } else if (strcmp(key, "cpu_s") == 0) {
+            drape_cli_result_num(r, jkey, drape_cli_cpu_s());
+        } else if (strcmp(key, "dc_sd") == 0) {
+            drape_cli_result_num(r, jkey, st->dc_sd);
+        } else if (strcmp(key, "dc_ci95") == 0) {
+            drape_cli_result_num(r, jkey, st->dc_ci95);
+        } else if (strcmp(key, "dc_mode") == 0) {
+            drape_cli_result_num(r, jkey, st->dc_mode);
+        } else if (strcmp(key, "nodes_hist") == 0) {
+            memcpy(r->hist, st->hist, sizeof r->hist);
+            drape_cli_result_hist(r, jkey);
+        } else if (strcmp(key, "specimens") == 0) {
+            r->spec = spec;
+            r->n_spec = n;
+            drape_cli_result_specimens(r, jkey);
+        } else if (strcmp(key, "specimens_failed") == 0) {
+            drape_cli_result_int(r, jkey, n_failed);
+        } else if (strcmp(key, "seed") == 0) {
+            drape_cli_result_int(r, jkey, (double)seed0);
+        } else if (!proto) {
+            drape_cli_result_num(r, jkey, NAN);
+        } else if (rule == R_SAME || proto->type == DRAPE_CLI_F_STR) {
+            if (proto->type == DRAPE_CLI_F_STR)
+                drape_cli_result_str(r, jkey, proto->is_null_text ? NULL : proto->text);
+            else if (proto->type == DRAPE_CLI_F_INT)
+                drape_cli_result_int(r, jkey, proto->value);
+            else
+                drape_cli_result_num(r, jkey, proto->value);
+        } else {
+            combine(r, jkey, proto, ch, n, rule);
+        }
+    }
+}
+
+int drape_cli_write_shadow(const char *dir, const drape_scene *s,
+                           const drape_svg_specimen *sp, int n,
+                           const drape_cli_result *r, drape_error *err)
+{
+    char path[4200], title[512];
+    snprintf(path, sizeof path, "%s/shadow.svg", dir);
+    const drape_cli_field *fab = drape_cli_result_find((drape_cli_result *)r, "fabric");
+    const drape_cli_field *meth = drape_cli_result_find((drape_cli_result *)r, "method");
+    snprintf(title, sizeof title, "%s, %s, %s, spacing %g cm",
+             fab && fab->type == DRAPE_CLI_F_STR ? fab->text : "",
+             drape_scene_kind_name(s->kind),
+             meth && meth->type == DRAPE_CLI_F_STR ? meth->text : "", 100.0 * s->spacing);
+    drape_svg_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.title = title;
+    sc.table = s->kind == DRAPE_SCENE_TABLE;
+    sc.specimen_d_m = s->diameter;
+    sc.support_d_m = s->support_diameter;
+    sc.width_m = s->width;
+    sc.height_m = s->height;
+    sc.table_round = s->table_shape == DRAPE_TABLE_ROUND;
+    sc.table_size_m = s->table_size;
+    sc.dc_mean = drape_cli_result_get(r, "dc");
+    sc.dc_ci95 = drape_cli_result_get(r, "dc_ci95");
+    double nf = drape_cli_result_get(r, "specimens_failed");
+    sc.n_failed = isfinite(nf) ? (int)nf : 0;
+    sc.hist = r->hist;
+    sc.hist_n = DRAPE_ENSEMBLE_MAX_NODES + 1;
+    drape_cli_afile af;
+    if (drape_cli_afile_open(&af, path, err) != 0) return -1;
+    if (drape_svg_shadow_write(af.f, &sc, sp, n) != 0) {
+        drape_cli_afile_abort(&af);
+        return drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot write: %s",
+                               strerror(errno));
+    }
+    return drape_cli_afile_commit(&af, err);
+}
+
+/* ---- driver ------------------------------------------------------------------- */
+
+int drape_cli_specimens_run(const run_args *a)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    drape_scene s;
+    const char *scene_path = a->scene_path;
+    /* the scene once here, for N and the seed; each child loads it again
+     * (and prints its warnings) */
+    if (drape_scene_load_flags(scene_path, a->fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u,
+                               &s, &err, NULL, NULL) != 0) {
+        drape_cli_print_error(&err);
+        return drape_error_exit_status(err.kind);
+    }
+    int n = a->specimens > 0 ? a->specimens : s.specimens;
+    if (n <= 1) return drape_cli_run_one(a, NULL);
+
+    unsigned long seed0 = a->has_seed ? a->seed : s.perturb_seed;
+    if (a->has_seed) s.perturb_seed = a->seed;
+    if (a->spacing > 0) s.spacing = a->spacing;
+    int jobs = a->jobs;
+    if (jobs <= 0) {
+        long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+        jobs = ncpu > 0 ? (int)ncpu : 1;
+    }
+    if (jobs > n) jobs = n;
+    int progress = !a->quiet && isatty(STDERR_FILENO);
+    int status = 0, created_dir = 0, n_started = 0, n_running = 0, n_done = 0;
+    child *ch = drape_calloc((size_t)n, sizeof *ch);
+    drape_cli_specimen *spec = drape_calloc((size_t)n, sizeof *spec);
+    drape_svg_specimen *sv = drape_calloc((size_t)n, sizeof *sv);
+    drape_cli_result *r = drape_calloc(1, sizeof *r);
+    double *dcs = drape_calloc((size_t)n, sizeof(double));
+    int *nodes = drape_calloc((size_t)n, sizeof(int));
+    if (!ch || !spec || !sv || !r || !dcs || !nodes) {
+        drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+        goto fail;
+    }
+    if (a->out_dir && drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0) goto fail;
+
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    ens_stop = 0;
+    sigaction(SIGINT, NULL, &old_int);
+    sigaction(SIGTERM, NULL, &old_term);
+    if (old_int.sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
+    if (old_term.sa_handler != SIG_IGN) sigaction(SIGTERM, &sa, NULL);
+
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int forwarded = 0;
+    while (n_done < n_started || (n_started < n && !ens_stop)) {
+        while (!ens_stop && n_started < n && n_running < jobs) {
+            child *c = &ch[n_started];
+            c->k = n_started;
+            c->fd = -1;
+            if (launch(a, c, seed0 + (unsigned long)n_started, a->out_dir) != 0) {
+                drape_error_set(&err, DRAPE_E_IO, NULL, 0, 0, NULL,
+                                "cannot start a process for specimen %d: %s", n_started + 1,
+                                strerror(errno));
+                ens_stop = -1;
+                break;
+            }
+            n_started++;
+            n_running++;
+        }
+        if (n_running == 0) break;
+        if (ens_stop > 0 && !forwarded) {
+            /* a signal sent to this process alone (kill PID) reaches the
+             * children too; from a terminal they had it already */
+            for (int k = 0; k < n_started; k++)
+                if (!ch[k].done) kill(ch[k].pid, (int)ens_stop);
+            forwarded = 1;
+        }
+        /* a child's CPU time: what RUSAGE_CHILDREN gains when it is
+         * waited for (wait4 is not POSIX) */
+        int ws;
+        struct rusage ru0, ru;
+        getrusage(RUSAGE_CHILDREN, &ru0);
+        pid_t pid = waitpid(-1, &ws, 0);
+        getrusage(RUSAGE_CHILDREN, &ru);
+        if (pid < 0) {
+            if (errno == EINTR) continue;
+            break;
+        }
+        for (int k = 0; k < n_started; k++) {
+            child *c = &ch[k];
+            if (c->pid != pid || c->done) continue;
+            c->done = 1;
+            c->exit_status = WIFEXITED(ws) ? WEXITSTATUS(ws) : 128 + WTERMSIG(ws);
+            c->cpu_s = (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec -
+                                ru0.ru_utime.tv_sec - ru0.ru_stime.tv_sec) +
+                       1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec -
+                                       ru0.ru_utime.tv_usec - ru0.ru_stime.tv_usec);
+            if (drain(c) != 0) {
+                drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+                ens_stop = -1;
+            }
+            parse_child(c);
+            n_running--;
+            n_done++;
+            if (progress)
+                fprintf(stderr, "\rdrape: specimen %d of %d done (seed %lu: %s), %d running ",
+                        n_done, n, seed0 + (unsigned long)k, spec_status(c), n_running);
+        }
+    }
+    if (progress) fputc('\n', stderr);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
+    if (ens_stop < 0) goto fail;
+
+    int n_failed = 0, interrupted = ens_stop > 0;
+    const child *first = NULL;
+    for (int k = 0; k < n; k++) {
+        child *c = &ch[k];
+        drape_cli_specimen *p = &spec[k];
+        p->seed = seed0 + (unsigned long)k;
+        const char *stx = k >= n_started ? "interrupted" : spec_status(c);
+        snprintf(p->status, sizeof p->status, "%.15s", stx);
+        int ok = k < n_started && spec_ok(c);
+        if (k < n_started && c->have_res && strcmp(p->status, "interrupted") == 0) interrupted = 1;
+        if (!ok && strcmp(p->status, "interrupted") != 0) {
+            n_failed++;
+            snprintf(p->status, sizeof p->status, "failed");
+        }
+        p->dc = ok ? drape_cli_result_get(&c->res, "dc") : NAN;
+        double nd = ok ? drape_cli_result_get(&c->res, "nodes") : NAN;
+        p->nodes = isfinite(nd) ? (int)nd : -1;
+        p->r_min_m = ok ? drape_cli_result_get(&c->res, "r_min_m") : NAN;
+        p->r_max_m = ok ? drape_cli_result_get(&c->res, "r_max_m") : NAN;
+        p->cpu_s = k < n_started ? c->cpu_s : NAN;
+        dcs[k] = p->dc;
+        nodes[k] = p->nodes;
+        if (ok && !first) first = c;
+        sv[k] = (drape_svg_specimen){p->seed, p->dc, p->nodes, c->cx, c->cy,
+                                     ok ? c->radii : NULL, ok ? c->n_radii : 0, c->thr};
+    }
+    drape_ensemble_stats st;
+    drape_ensemble_stats_compute(dcs, nodes, n, &st);
+    double wall = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    build_result(r, ch, n, first, &st, n_failed, interrupted, wall, seed0, spec);
+    if (!drape_cli_result_check_keys(r)) {
+        drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                        "ensemble result fields differ from drape_cli_run_keys");
+        goto fail;
+    }
+    if (a->out_dir && first && !interrupted &&
+        (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
+        drape_cli_write_shadow(a->out_dir, &s, sv, n, r, &err) != 0)
+        goto fail;
+    if (a->csv) drape_cli_result_print_csv(stdout, r);
+    else if (drape_cli_result_print_json(stdout, r) != 0) {
+        drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+        goto fail;
+    }
+    if (fflush(stdout) != 0) {
+        drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");
+        goto fail;
+    }
+    if (interrupted) {
+        int sig = ens_stop > 0 ? (int)ens_stop : SIGINT;
+        fprintf(stderr, "drape: interrupted by %s after %d of %d specimens (an ensemble is not "
+                "resumable: run it again)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
+                n_done, n);
+        status = 128 + sig;
+    } else if (st.n == 0) {
+        fprintf(stderr, "drape: every specimen failed\n");
+        status = drape_error_exit_status(DRAPE_E_NUMERIC);
+    } else if (n_failed) {
+        fprintf(stderr, "drape: warning: %d of %d specimens failed; the statistics use the "
+                "other %d\n", n_failed, n, st.n);
+    }
+    goto out;
+fail:
+    drape_cli_print_error(&err);
+    status = drape_error_exit_status(err.kind);
+    for (int k = 0; ch && k < n_started; k++)
+        if (!ch[k].done) kill(ch[k].pid, SIGTERM);
+    while (n_running > 0 && wait(NULL) > 0) n_running--;
+    if (created_dir) rmdir(a->out_dir); /* only if empty */
+out:
+    for (int k = 0; ch && k < n; k++) {
+        if (ch[k].fd >= 0 && k < n_started) close(ch[k].fd);
+        drape_free(ch[k].buf);
+        drape_free(ch[k].radii);
+    }
+    drape_free(ch);
+    drape_free(spec);
+    drape_free(sv);
+    drape_free(r);
+    drape_free(dcs);
+    drape_free(nodes);
+    return status;
+}

@@ -1,0 +1,169 @@
+/* check_ensemble.c: the statistics of repeated specimens against
+ * independent values: sums computed here, Student's t quantiles from a
+ * printed table, Fisher's exact test against hand-counted hypergeometric
+ * sums and published examples, Welch's test against its textbook example.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "drape/ensemble.h"
+#include "testutil.h"
+
+START_TEST(test_stats_by_hand)
+{
+    const double dc[] = {0.80, 0.82, 0.85, 0.81, NAN, 0.83};
+    const int nodes[] = {4, 3, 2, 4, 3, 3};
+    drape_ensemble_stats s;
+    drape_ensemble_stats_compute(dc, nodes, 6, &s);
+    ck_assert_int_eq(s.n, 5); /* the NaN specimen is left out */
+    double mean = (0.80 + 0.82 + 0.85 + 0.81 + 0.83) / 5.0;
+    ck_assert_close_rel(s.dc_mean, mean, 1e-14);
+    double ss = 0;
+    const double v[] = {0.80, 0.82, 0.85, 0.81, 0.83};
+    for (int k = 0; k < 5; k++) ss += (v[k] - mean) * (v[k] - mean);
+    double sd = sqrt(ss / 4.0);
+    ck_assert_close_rel(s.dc_sd, sd, 1e-12);
+    /* t_{0.975, 4} = 2.776 (any printed t table) */
+    ck_assert_close_rel(s.dc_ci95, 2.7764451 * sd / sqrt(5.0), 1e-6);
+    ck_assert_int_eq(s.hist[2], 1);
+    ck_assert_int_eq(s.hist[3], 2); /* 0.82, 0.83 (the third 3 had no DC) */
+    ck_assert_int_eq(s.hist[4], 2);
+    /* tie between 3 and 4 nodes: the smaller wins */
+    ck_assert_int_eq(s.nodes_mode, 3);
+    ck_assert_close_rel(s.dc_mode, (0.82 + 0.83) / 2.0, 1e-14);
+    ck_assert_close_rel(s.dc_min, 0.80, 1e-15);
+    ck_assert_close_rel(s.dc_max, 0.85, 1e-15);
+}
+END_TEST
+
+START_TEST(test_stats_small)
+{
+    drape_ensemble_stats s;
+    const double one[] = {0.7};
+    const int n1[] = {5};
+    drape_ensemble_stats_compute(one, n1, 1, &s);
+    ck_assert_int_eq(s.n, 1);
+    ck_assert_double_eq(s.dc_mean, 0.7);
+    ck_assert(isnan(s.dc_sd) && isnan(s.dc_ci95));
+    ck_assert_int_eq(s.nodes_mode, 5);
+    drape_ensemble_stats_compute(one, n1, 0, &s);
+    ck_assert_int_eq(s.n, 0);
+    ck_assert(isnan(s.dc_mean));
+    ck_assert_int_eq(s.nodes_mode, -1);
+}
+END_TEST
+
+START_TEST(test_t95_table)
+{
+    /* two-sided 95 % points of Student's t, printed tables */
+    ck_assert_close_rel(drape_ensemble_t95(1), 12.7062, 1e-5);
+    ck_assert_close_rel(drape_ensemble_t95(9), 2.2622, 1e-4);
+    ck_assert_close_rel(drape_ensemble_t95(15), 2.1314, 1e-4);
+    ck_assert_close_rel(drape_ensemble_t95(30), 2.0423, 1e-4);
+    ck_assert(isnan(drape_ensemble_t95(0)));
+}
+END_TEST
+
+/* Hypergeometric probability of a 2 x 2 table with first row (a, b) and
+ * columns (a + c, b + d), by factorials. */
+static double hyper(int a, int b, int c, int d)
+{
+    return exp(lgamma(a + b + 1) + lgamma(c + d + 1) + lgamma(a + c + 1) + lgamma(b + d + 1) -
+               lgamma(a + 1) - lgamma(b + 1) - lgamma(c + 1) - lgamma(d + 1) -
+               lgamma(a + b + c + d + 1));
+}
+
+START_TEST(test_fisher_2x2)
+{
+    /* Fisher's tea-tasting table [[3, 1], [1, 3]]: two-sided p = 34/70 */
+    int a[] = {3, 1}, b[] = {1, 3};
+    ck_assert_close_rel(drape_ensemble_exact_p(a, b, 2), 34.0 / 70.0, 1e-10);
+    /* [[1, 9], [11, 3]] (the textbook example): the tables no more
+     * probable than it, summed by hand */
+    int c[] = {1, 9}, d[] = {11, 3};
+    double p0 = hyper(1, 9, 11, 3), p = 0;
+    for (int x = 0; x <= 10; x++) { /* x = top-left count, row 1 = 10, col 1 = 12 */
+        int y = 10 - x, z = 12 - x, w = 24 - 10 - z;
+        if (y < 0 || z < 0 || w < 0) continue;
+        double q = hyper(x, y, z, w);
+        if (q <= p0 * (1 + 1e-7)) p += q;
+    }
+    ck_assert_close_rel(drape_ensemble_exact_p(c, d, 2), p, 1e-9);
+    ck_assert_close_rel(p, 0.002759456, 1e-5);
+}
+END_TEST
+
+START_TEST(test_freeman_halton)
+{
+    /* identical histograms: nothing is less probable than some, p = 1 up
+     * to the tables as probable as it; p must be large */
+    int a[] = {0, 0, 4, 4, 8}, b[] = {0, 0, 4, 4, 8};
+    double p = drape_ensemble_exact_p(a, b, 5);
+    ck_assert(p > 0.9 && p <= 1.0);
+    /* disjoint histograms of 8 and 8: only the two extreme tables are as
+     * improbable; p = 2 / C(16, 8) */
+    int c[] = {8, 0}, d[] = {0, 8};
+    ck_assert_close_rel(drape_ensemble_exact_p(c, d, 2), 2.0 / 12870.0, 1e-9);
+    /* 2 x 3 by brute force over every first row with the margins */
+    int e[] = {1, 6, 9}, f[] = {4, 3, 3};
+    int col[3] = {5, 9, 12};
+    double lp0 = 0, tot = 0, sum = 0;
+    /* log P = sum ln C(c_j, x_j) - ln C(N, n_a) */
+    double lden = lgamma(27) - lgamma(17) - lgamma(11);
+    for (int j = 0; j < 3; j++) lp0 += lgamma(col[j] + 1) - lgamma(e[j] + 1) - lgamma(col[j] - e[j] + 1);
+    lp0 -= lden;
+    for (int x0 = 0; x0 <= 5; x0++)
+        for (int x1 = 0; x1 <= 9; x1++) {
+            int x2 = 16 - x0 - x1;
+            if (x2 < 0 || x2 > 12) continue;
+            int x[3] = {x0, x1, x2};
+            double lp = -lden;
+            for (int j = 0; j < 3; j++) lp += lgamma(col[j] + 1) - lgamma(x[j] + 1) - lgamma(col[j] - x[j] + 1);
+            tot += exp(lp);
+            if (lp <= lp0 + 1e-7) sum += exp(lp);
+        }
+    ck_assert_close_rel(tot, 1.0, 1e-10); /* the enumeration is complete */
+    ck_assert_close_rel(drape_ensemble_exact_p(e, f, 3), sum, 1e-9);
+    /* columns empty in both samples change nothing */
+    int e2[] = {0, 1, 6, 0, 9}, f2[] = {0, 4, 3, 0, 3};
+    ck_assert_close_rel(drape_ensemble_exact_p(e2, f2, 5), sum, 1e-12);
+    int z[] = {0, 0};
+    ck_assert(isnan(drape_ensemble_exact_p(z, d, 2)));
+    int one_a[] = {0, 5}, one_b[] = {0, 3};
+    ck_assert_double_eq(drape_ensemble_exact_p(one_a, one_b, 2), 1.0);
+}
+END_TEST
+
+START_TEST(test_welch_example)
+{
+    /* Welch's t test, the worked example with unequal variances (the
+     * textbook A1/A2 samples, n = 15 each): t = -2.46, nu = 24.9,
+     * p = 0.021 */
+    const double a1[] = {27.5, 21.0, 19.0, 23.6, 17.0, 17.9, 16.9, 20.1,
+                         21.9, 22.6, 23.1, 19.6, 19.0, 21.7, 21.4};
+    const double a2[] = {27.1, 22.0, 20.8, 23.4, 23.4, 23.5, 25.8, 22.0,
+                         24.8, 20.2, 21.9, 22.1, 22.9, 20.5, 24.4};
+    int nd[15];
+    for (int k = 0; k < 15; k++) nd[k] = 0;
+    drape_ensemble_stats s1, s2;
+    drape_ensemble_stats_compute(a1, nd, 15, &s1);
+    drape_ensemble_stats_compute(a2, nd, 15, &s2);
+    double p = drape_ensemble_welch_p(&s1, &s2);
+    ck_assert_msg(fabs(p - 0.021) < 0.0015, "p = %.17g", p);
+    ck_assert_close_rel(drape_ensemble_welch_p(&s2, &s1), p, 1e-12);
+}
+END_TEST
+
+Suite *ensemble_suite(void)
+{
+    Suite *s = suite_create("ensemble");
+    TCase *tc = tcase_create("stats");
+    tcase_add_test(tc, test_stats_by_hand);
+    tcase_add_test(tc, test_stats_small);
+    tcase_add_test(tc, test_t95_table);
+    tcase_add_test(tc, test_fisher_2x2);
+    tcase_add_test(tc, test_freeman_halton);
+    tcase_add_test(tc, test_welch_example);
+    suite_add_tcase(s, tc);
+    return s;
+}

@@ -1,0 +1,246 @@
+/* check_specimens.c: `drape run` with repeated specimens (issue 15;
+ * cli_specimens.c).  The ensemble's statistics are recomputed here from
+ * its own specimens array, each specimen is checked against a separate
+ * single run with the same seed, and the picture is parsed as XML
+ * (libxml2) and its outlines counted. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <json-c/json.h>
+#include <libxml/parser.h>
+#include <libxml/xpath.h>
+#include <libxml/xpathInternals.h>
+
+#include "testutil.h"
+
+#define CAP (1 << 20)
+static char out[CAP], err[CAP];
+
+static double jnum(json_object *o, const char *key)
+{
+    json_object *v;
+    if (!json_object_object_get_ex(o, key, &v) || !v) return NAN;
+    return json_object_get_double(v);
+}
+
+/* Number of nodes matching an XPath expression in the SVG file. */
+static int xpath_count(const char *path, const char *expr)
+{
+    xmlDocPtr doc = xmlReadFile(path, NULL, XML_PARSE_NONET);
+    if (!doc) return -1;
+    xmlXPathContextPtr ctx = xmlXPathNewContext(doc);
+    xmlXPathRegisterNs(ctx, BAD_CAST "s", BAD_CAST "http://www.w3.org/2000/svg");
+    xmlXPathObjectPtr r = xmlXPathEvalExpression(BAD_CAST expr, ctx);
+    int n = r && r->nodesetval ? r->nodesetval->nodeNr : 0;
+    xmlXPathFreeObject(r);
+    xmlXPathFreeContext(ctx);
+    xmlFreeDoc(doc);
+    return n;
+}
+
+START_TEST(test_ensemble_statistics)
+{
+    char dir[600], args[1200], svg[700];
+    snprintf(dir, sizeof dir, "%s/ens", tu_scratch_dir());
+    snprintf(args, sizeof args,
+             "run -q ../scenes/cusick.yaml --spacing 3cm --method static --specimens 4 -j 2 "
+             "--seed 5 --out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "not JSON: %s", out);
+    json_object *sp, *hist;
+    ck_assert(json_object_object_get_ex(o, "specimens", &sp));
+    ck_assert_int_eq((int)json_object_array_length(sp), 4);
+    ck_assert(json_object_object_get_ex(o, "nodes_hist", &hist));
+    double sum = 0, ss = 0, cpu = 0, dcs[4];
+    int count[40] = {0};
+    for (int k = 0; k < 4; k++) {
+        json_object *s = json_object_array_get_idx(sp, (size_t)k);
+        ck_assert_int_eq((int)jnum(s, "seed"), 5 + k);
+        json_object *st;
+        ck_assert(json_object_object_get_ex(s, "status", &st));
+        ck_assert_str_eq(json_object_get_string(st), "equilibrium");
+        dcs[k] = jnum(s, "dc");
+        sum += dcs[k];
+        cpu += jnum(s, "cpu_s");
+        int nd = (int)jnum(s, "nodes");
+        ck_assert(nd >= 0 && nd < 40);
+        count[nd]++;
+        ck_assert(jnum(s, "r_min_m") <= jnum(s, "r_max_m"));
+    }
+    double mean = sum / 4;
+    for (int k = 0; k < 4; k++) ss += (dcs[k] - mean) * (dcs[k] - mean);
+    double sd = sqrt(ss / 3);
+    ck_assert_close_rel(jnum(o, "dc"), mean, 1e-8);
+    if (sd > 0) {
+        ck_assert_close_rel(jnum(o, "dc_sd"), sd, 1e-6);
+        /* t_{0.975, 3} = 3.182 (printed tables) */
+        ck_assert_close_rel(jnum(o, "dc_ci95"), 3.182446 * sd / 2.0, 1e-5);
+    }
+    int mode = -1, best = 0, nh = 0;
+    for (int k = 0; k < 40; k++) {
+        if (count[k] > best) {
+            best = count[k];
+            mode = k;
+        }
+        char key[8];
+        snprintf(key, sizeof key, "%d", k);
+        json_object *v;
+        int in = json_object_object_get_ex(hist, key, &v) ? json_object_get_int(v) : 0;
+        ck_assert_int_eq(in, count[k]);
+        nh += in;
+    }
+    ck_assert_int_eq(nh, 4);
+    ck_assert_int_eq((int)jnum(o, "nodes"), mode);
+    ck_assert_int_eq((int)jnum(o, "specimens_failed"), 0);
+    ck_assert_int_eq((int)jnum(o, "seed"), 5);
+    /* the parent's CPU time includes its children's */
+    ck_assert_msg(jnum(o, "cpu_s") >= 0.95 * cpu, "cpu_s %g, specimens %g", jnum(o, "cpu_s"), cpu);
+    json_object_put(o);
+
+    /* specimen 3 (seed 7) is the single run with that seed */
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+                                  "--specimens 1 --seed 7", out, CAP, err, CAP), 0);
+    o = json_tokener_parse(out);
+    ck_assert(o != NULL);
+    ck_assert_close_rel(jnum(o, "dc"), dcs[2], 1e-9);
+    ck_assert(isnan(jnum(o, "dc_sd"))); /* null for one specimen */
+    json_object_put(o);
+
+    /* the picture: valid XML, one outline per specimen, the support disk */
+    snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
+    ck_assert_int_eq(xpath_count(svg, "//s:polygon[@class='shadow']"), 4);
+    ck_assert_int_eq(xpath_count(svg, "//s:polygon[@class='shadow' and @data-seed='6']"), 1);
+    ck_assert_int_eq(xpath_count(svg, "//s:circle[@class='support']"), 1);
+    ck_assert_int_eq(xpath_count(svg, "//s:circle[@class='specimen']"), 1);
+    char sub[700];
+    snprintf(sub, sizeof sub, "%s/specimen-004", dir);
+    ck_assert_msg(access(sub, F_OK) == 0, "%s missing", sub);
+}
+END_TEST
+
+START_TEST(test_ensemble_csv)
+{
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+                                  "--specimens 3 --format csv", out, CAP, err, CAP), 0);
+    char *nl = strchr(out, '\n');
+    ck_assert(nl);
+    *nl = 0;
+    const char *hdr = out, *row = nl + 1;
+    /* column index of each key, then the value in the row */
+    const char *want[] = {"dc_sd", "dc_ci95", "dc_mode", "nodes_hist", "specimens", NULL};
+    for (int w = 0; want[w]; w++) {
+        int col = 0, found = -1;
+        const char *p = hdr;
+        while (*p) {
+            size_t len = strcspn(p, ",");
+            if (strlen(want[w]) == len && strncmp(p, want[w], len) == 0) found = col;
+            p += len;
+            if (*p == ',') p++;
+            col++;
+        }
+        ck_assert_msg(found >= 0, "no column %s", want[w]);
+        const char *q = row;
+        for (int c = 0; c < found; c++) q = strchr(q, ',') + 1;
+        size_t vl = strcspn(q, ",\n");
+        char v[64];
+        snprintf(v, sizeof v, "%.*s", (int)vl, q);
+        if (strcmp(want[w], "specimens") == 0) ck_assert_str_eq(v, "3");
+        if (strcmp(want[w], "nodes_hist") == 0) {
+            /* "k:n;k:n" with counts summing to 3 */
+            int total = 0, k, n;
+            const char *s = v;
+            while (sscanf(s, "%d:%d", &k, &n) == 2) {
+                total += n;
+                s = strchr(s, ';');
+                if (!s) break;
+                s++;
+            }
+            ck_assert_msg(total == 3, "nodes_hist %s", v);
+        }
+    }
+}
+END_TEST
+
+/* Failed specimens are counted; with none left the run fails (exit 4). */
+START_TEST(test_ensemble_failures)
+{
+    int st = tu_run_drape("run -q ../scenes/cusick.yaml --spacing 5cm --method dynamic "
+                          "--max-steps 1 --specimens 2", out, CAP, err, CAP);
+    ck_assert_msg(st == 4, "exit %d, %s", st, err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "%s", out);
+    ck_assert_int_eq((int)jnum(o, "specimens_failed"), 2);
+    json_object *s;
+    ck_assert(json_object_object_get_ex(o, "status", &s));
+    ck_assert_str_eq(json_object_get_string(s), "failed");
+    ck_assert(isnan(jnum(o, "dc")));
+    json_object_put(o);
+    ck_assert_msg(strstr(err, "specimen 2 (seed 2): "), "%s", err);
+}
+END_TEST
+
+/* The scene keys: specimens, solver.method and the fall's time and step. */
+START_TEST(test_scene_keys)
+{
+    char args[1200];
+    char text[1024];
+    snprintf(text, sizeof text,
+             "scene: cusick\nfabric: %s/../fabrics/cotton-breen.yaml\n"
+             "specimen: {shape: circle, diameter: 30 cm}\nsupport: {diameter: 18 cm}\n"
+             "spacing: 3 cm\nperturbation: {amplitude: 0.1 mm, seed: 3}\n"
+             "specimens: 2\nsolver: {method: fall, fall_time: 0.2 s, fall_step: 10 ms}\n"
+             "end: {equilibrium: {speed: 1e-4 m/s, window: 0.2 s}, t_max: 20 s}\n",
+             getcwd(args, sizeof args));
+    const char *scene = tu_write_file("ens.yaml", text);
+    snprintf(args, sizeof args, "run -q %s", scene);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert(o);
+    json_object *sp, *m;
+    ck_assert(json_object_object_get_ex(o, "specimens", &sp));
+    ck_assert_int_eq((int)json_object_array_length(sp), 2);
+    ck_assert(json_object_object_get_ex(o, "method", &m));
+    ck_assert_str_eq(json_object_get_string(m), "fall");
+    ck_assert_close_rel(jnum(o, "fall_time_s"), 0.2, 1e-12);
+    ck_assert_close_rel(jnum(o, "fall_step_s"), 0.01, 1e-12);
+    ck_assert_int_eq((int)jnum(o, "seed"), 3);
+    json_object_put(o);
+    /* bad values name the file, line and key */
+    char *q = strstr(text, "specimens: 2");
+    memcpy(q, "specimens: 0", 12);
+    scene = tu_write_file("ens-bad.yaml", text);
+    snprintf(args, sizeof args, "run -q %s", scene);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
+    ck_assert_msg(strstr(err, "ens-bad.yaml:7:12: specimens: expected an integer from 1 to 1000"),
+                  "%s", err);
+    memcpy(q, "specimens: 2", 12);
+    q = strstr(text, "method: fall");
+    memcpy(q, "method: fast", 12);
+    scene = tu_write_file("ens-bad2.yaml", text);
+    snprintf(args, sizeof args, "run -q %s", scene);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
+    ck_assert_msg(strstr(err, "ens-bad2.yaml:8:") && strstr(err, "solver.method"), "%s", err);
+    /* the command line */
+    ck_assert_int_eq(tu_run_drape("run --specimens 0", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run -j x", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --seed -1", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --fall-time 0s", out, CAP, err, CAP), 2);
+}
+END_TEST
+
+Suite *specimens_suite(void)
+{
+    Suite *s = suite_create("specimens");
+    TCase *tc = tcase_create("cli");
+    tcase_set_timeout(tc, 120);
+    tcase_add_test(tc, test_ensemble_statistics);
+    tcase_add_test(tc, test_ensemble_csv);
+    tcase_add_test(tc, test_ensemble_failures);
+    tcase_add_test(tc, test_scene_keys);
+    suite_add_tcase(s, tc);
+    return s;
+}
