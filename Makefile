@@ -10,6 +10,8 @@
 #   make bench-quick  integrators on the default scenes -> docs/integrators.md
 #   make bench     work-precision report -> docs/performance/ (drape bench;
 #                  installs gnuplot-nox when missing; docs/performance.md)
+#   make bench-ensemble  the drape test, accurate against fast ensembles
+#                  (issue 15) -> docs/performance.md (1-2 h of CPU)
 #   make check-hard  the hard-case suite tests/hard/ (docs/stability.md)
 #   make check-default  the default Cusick scene, dynamic at 1 cm, must reach
 #                  equilibrium (~150 s CPU; in CI)
@@ -64,6 +66,7 @@ TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/
 HEADERS  = $(wildcard include/drape/*.h)
 
 .PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
+        bench-ensemble \
         asan valgrind fuzz install clean
 
 all: drape
@@ -122,6 +125,10 @@ bench-quick: drape
 # Work-precision report (docs/performance.md).
 bench: drape
 	scripts/bench.sh
+
+# Accurate against fast drape-test ensembles (issue 15; docs/ensemble.md).
+bench-ensemble: drape
+	scripts/bench-ensemble.sh
 
 # The default scene to equilibrium, the way it asks (issue 3).
 check-default: drape

@@ -137,6 +137,7 @@ const char *drape_equilibrium_status_name(drape_equilibrium_status s)
     case DRAPE_EQ_MAX_ITERS: return "max_iters";
     case DRAPE_EQ_STALLED: return "stalled";
     case DRAPE_EQ_INTERRUPTED: return "interrupted";
+    case DRAPE_EQ_DYN_ONLY: return "dyn_only";
     }
     return "stalled";
 }
@@ -753,6 +754,12 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         }
         if (rcd == 2) { /* stopped: report the state reached, not certified */
             r->status = DRAPE_EQ_INTERRUPTED;
+            rc = 0;
+            goto done;
+        }
+        if (o.dyn_only) { /* the state after the dynamics, no minimisation */
+            x = iterate_home(&w, x);
+            r->status = DRAPE_EQ_DYN_ONLY;
             rc = 0;
             goto done;
         }

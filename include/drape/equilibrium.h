@@ -69,6 +69,8 @@ typedef struct drape_equilibrium_opts {
     double dyn_time;     /* s: damped dynamics before the minimisation; 0 =
                             off (default) */
     double dyn_dt;       /* s: its fixed step (needed when dyn_time > 0) */
+    int dyn_only;        /* 1: return after the damped dynamics (status
+                            DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
     int eig_iters;       /* inverse iterations for omega_min (0 = skip); 40 */
     double force_ref;    /* N; 0 = m_i g (the model then needs gravity) */
@@ -92,11 +94,13 @@ typedef enum drape_equilibrium_status {
     DRAPE_EQ_STALLED,   /* no step lowers E_pot any more: the roundoff floor
                            lies above tol, or dt collapsed; x is the last
                            accepted iterate */
+    DRAPE_EQ_DYN_ONLY,   /* opts.dyn_only: x is the state after the damped
+                           dynamics, not minimised (for tests of the fall) */
     DRAPE_EQ_INTERRUPTED /* opts.stop was raised; x is the last accepted
                            iterate, not certified */
 } drape_equilibrium_status;
 
-/* "converged", "max_iters", "stalled", "interrupted". */
+/* "converged", "max_iters", "stalled", "dyn_only", "interrupted". */
 const char *drape_equilibrium_status_name(drape_equilibrium_status s);
 
 typedef struct drape_equilibrium_result {

@@ -1,0 +1,201 @@
+#!/bin/sh
+# make bench-ensemble (issue 15, items 2, 3, 4, 5 and 7): the drape test as
+# a lab runs it, accurate against fast, measured and written down.
+#
+# For each case (scene, fabric, spacing):
+#   accurate  drape run CASE --specimens N_REF --method dynamic --integrator auto
+#   fall      drape run CASE --specimens N_FAST            (the default method)
+#   compare   drape compare ACCURATE FALL: exact test of the node histograms
+#             (p_nodes), Welch's test of the mean DCs, the difference of the
+#             means, and the ratio of CPU seconds per specimen.
+# Item 3 asks of the fall ensemble: (a) p_nodes >= 0.05, (b) |dc_diff| <=
+# 0.01 and inside the accurate 95 % interval, (c) cpu_ratio >= 50.
+# Also: a second accurate setting on the default scene (the scene's own
+# arkode-imex against auto, item 2) and the fall ensemble's mean DC against
+# the lattice spacing (item 5).
+#
+# Results: docs/performance/ensemble/CASE-{accurate,fall,compare}.json, each
+# with a .meta file (command, drape commit, date, CPU and wall seconds), and
+# the tables between the markers "ensemble-bench" in docs/performance.md.
+#
+# Environment:
+#   BENCH_CASES   cases to run (default: all; see case_args)
+#   BENCH_REF_SPECIMENS, BENCH_FAST_SPECIMENS   (16, 32)
+#   BENCH_JOBS    specimens at a time (2)
+#   BENCH_REUSE_ACCURATE=1  keep an accurate JSON that exists (the slow part:
+#                 about 50 s of CPU per specimen at 1 cm); its .meta says
+#                 which commit made it
+#   BENCH_SPACINGS  spacings of the study (2cm 1cm 0.75cm 0.5cm; "" = none)
+#   DRAPE_BIN     the drape binary (./drape)
+# The accurate ensembles take 1-2 hours of CPU in all; the rest minutes.
+set -eu
+cd "$(dirname "$0")/.."
+DRAPE=${DRAPE_BIN:-./drape}
+OUT=docs/performance/ensemble
+N_REF=${BENCH_REF_SPECIMENS:-16}
+N_FAST=${BENCH_FAST_SPECIMENS:-32}
+JOBS=${BENCH_JOBS:-2}
+CASES=${BENCH_CASES:-"cotton-1cm cotton-poly-1cm jacket-1cm tablecloth-1cm cotton-2cm table-2cm"}
+SPACINGS=${BENCH_SPACINGS-"2cm 1cm 0.75cm 0.5cm"}
+REUSE=${BENCH_REUSE_ACCURATE:-0}
+COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+[ -z "$(git status --porcelain -- src include 2>/dev/null)" ] || COMMIT="$COMMIT+changes"
+mkdir -p "$OUT"
+
+case_args() {
+    case "$1" in
+    cotton-1cm) echo "scenes/cusick.yaml" ;;
+    cotton-poly-1cm) echo "scenes/cusick.yaml --fabric fabrics/cotton-poly-wang.yaml" ;;
+    jacket-1cm) echo "scenes/cusick.yaml --fabric fabrics/polyester-jacket-wang.yaml" ;;
+    tablecloth-1cm) echo "scenes/cusick.yaml --fabric fabrics/polyester-tablecloth-wang.yaml" ;;
+    cotton-2cm) echo "scenes/cusick.yaml --spacing 2cm" ;;
+    table-2cm) echo "scenes/table.yaml --spacing 2cm" ;;
+    spacing-*) echo "scenes/cusick.yaml --spacing ${1#spacing-}" ;;
+    *) echo "bench-ensemble: unknown case $1" >&2; exit 2 ;;
+    esac
+}
+
+# run NAME ARGS...: drape run ARGS > OUT/NAME.json, with its .meta
+run() {
+    name=$1
+    shift
+    echo "bench-ensemble: $name: drape run $*" >&2
+    t=$(mktemp)
+    /usr/bin/time -f "%U %S %e" -o "$t" "$DRAPE" run -q "$@" > "$OUT/$name.json.tmp" ||
+        echo "bench-ensemble: $name: exit status $? (kept: its specimens say why)" >&2
+    mv "$OUT/$name.json.tmp" "$OUT/$name.json"
+    read -r u s e < "$t"
+    rm -f "$t"
+    printf 'command: drape run -q %s\ncommit: %s\ndate: %s\ncpu_s: %s\nwall_s: %s\n' \
+        "$*" "$COMMIT" "$(date -u +%FT%TZ)" "$(echo "$u $s" | awk '{print $1 + $2}')" "$e" \
+        > "$OUT/$name.meta"
+}
+
+for c in $CASES; do
+    a=$(case_args "$c")
+    # shellcheck disable=SC2086
+    if [ "$REUSE" = 1 ] && [ -s "$OUT/$c-accurate.json" ]; then
+        echo "bench-ensemble: $c: keeping $OUT/$c-accurate.json ($(grep commit "$OUT/$c-accurate.meta" 2>/dev/null))" >&2
+    else
+        run "$c-accurate" $a --specimens "$N_REF" -j "$JOBS" --method dynamic --integrator auto
+    fi
+    # shellcheck disable=SC2086
+    run "$c-fall" $a --specimens "$N_FAST" -j "$JOBS"
+    "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" > "$OUT/$c-compare.json"
+done
+# item 2: a second accurate setting, the scene's own integrator (arkode-imex)
+case " $CASES " in
+*" cotton-1cm "*)
+    if [ "$REUSE" = 1 ] && [ -s "$OUT/cotton-1cm-imex.json" ]; then
+        echo "bench-ensemble: keeping $OUT/cotton-1cm-imex.json" >&2
+    else
+        run cotton-1cm-imex scenes/cusick.yaml --specimens "$N_REF" -j "$JOBS" --method dynamic
+    fi
+    "$DRAPE" compare "$OUT/cotton-1cm-accurate.json" "$OUT/cotton-1cm-imex.json" \
+        > "$OUT/cotton-1cm-imex-compare.json" ;;
+esac
+# item 5: the fall ensemble against the spacing
+for h in $SPACINGS; do
+    # shellcheck disable=SC2046
+    run "spacing-$h-fall" $(case_args "spacing-$h") --specimens "$N_FAST" -j "$JOBS"
+done
+
+python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS" <<'EOF'
+import json, math, os, re, sys
+out, commit, n_ref, n_fast, spacings = sys.argv[1:6]
+def load(name):
+    p = os.path.join(out, name)
+    return json.load(open(p)) if os.path.exists(p) else None
+def meta(name):
+    p = os.path.join(out, name + ".meta")
+    d = {}
+    if os.path.exists(p):
+        for l in open(p):
+            k, _, v = l.partition(": ")
+            d[k] = v.strip()
+    return d
+def hist(h):
+    return ", ".join("%s: %d" % (k, h[k]) for k in sorted(h, key=int))
+def fmt(d):
+    return "%.4f +- %.4f" % (d["dc"], d["dc_ci95"]) if d.get("dc_ci95") is not None else "%.4f" % d["dc"]
+rows = []
+cases = ["cotton-1cm", "cotton-poly-1cm", "jacket-1cm", "tablecloth-1cm", "cotton-2cm", "table-2cm"]
+lines = ["| case | accurate: n, DC +- 95 %, nodes | CPU s / specimen | fall: n, DC +- 95 %, nodes | CPU s / specimen | p_nodes (a) | DC diff (b) | CPU ratio (c) | a b c |",
+         "|---|---|---|---|---|---|---|---|---|"]
+for c in cases:
+    cmp = load(c + "-compare.json")
+    if not cmp:
+        continue
+    r, o = cmp["reference"], cmp["other"]
+    a_ok = cmp["p_nodes"] >= 0.05
+    b_ok = abs(cmp["dc_diff"]) <= 0.01 and (cmp["dc_in_ci95"] == 1 or r["dc_ci95"] is None
+                                            or abs(cmp["dc_diff"]) <= r["dc_ci95"])
+    c_ok = cmp["cpu_ratio"] is not None and cmp["cpu_ratio"] >= 50
+    lines.append("| %s | %d, %s, {%s} | %.1f | %d, %s, {%s} | %.2f | %.3f | %+.4f%s | %.0f | %s |" % (
+        c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"],
+        o["n"], fmt(o), hist(o["nodes_hist"]), o["cpu_per_specimen_s"], cmp["p_nodes"],
+        cmp["dc_diff"], "" if cmp["dc_in_ci95"] else " (outside)", cmp["cpu_ratio"],
+        " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
+prov = []
+for c in cases:
+    for k in ("accurate", "fall"):
+        m = meta("%s-%s" % (c, k))
+        if m:
+            prov.append("- `%s-%s`: `%s` (drape %s, %s; %s CPU s, %s s wall)" % (
+                c, k, m.get("command", "?"), m.get("commit", "?"), m.get("date", "?"),
+                m.get("cpu_s", "?"), m.get("wall_s", "?")))
+imex = load("cotton-1cm-imex-compare.json")
+second = []
+if imex:
+    r, o = imex["reference"], imex["other"]
+    second = ["| setting | n | DC +- 95 % | sd | nodes | CPU s / specimen |", "|---|---|---|---|---|---|",
+              "| auto, rtol 1e-4 | %d | %s | %.4f | {%s} | %.1f |" % (r["n"], fmt(r), r["dc_sd"], hist(r["nodes_hist"]), r["cpu_per_specimen_s"]),
+              "| arkode-imex, rtol 1e-4 (the scene's) | %d | %s | %.4f | {%s} | %.1f |" % (o["n"], fmt(o), o["dc_sd"], hist(o["nodes_hist"]), o["cpu_per_specimen_s"]),
+              "", "Exact test of the node histograms p = %.3f, Welch's test of the means p = %.3f, difference %+.4f." % (imex["p_nodes"], imex["p_mean"], imex["dc_diff"])]
+    m = meta("cotton-1cm-imex")
+    if m:
+        prov.append("- `cotton-1cm-imex`: `%s` (drape %s, %s)" % (m.get("command", "?"), m.get("commit", "?"), m.get("date", "?")))
+sp = ["| spacing | particles | n | DC +- 95 % | sd | nodes | dc_mode | CPU s / specimen |", "|---|---|---|---|---|---|---|---|"]
+pts = []
+for h in spacings.split():
+    d = load("spacing-%s-fall.json" % h)
+    if not d:
+        continue
+    n = len([s for s in d["specimens"] if s["dc"] is not None])
+    sp.append("| %s | %d | %d | %s | %.4f | {%s} | %.4f | %.2f |" % (
+        h, d["particles"], n, fmt(d), d["dc_sd"] or 0, hist(d["nodes_hist"]), d["dc_mode"],
+        d["cpu_s"] / max(1, len(d["specimens"]))))
+    pts.append((float(h.rstrip("cm")), d["dc"], d["dc_ci95"]))
+fit = ""
+if len(pts) >= 3:
+    # DC(h) = DC0 + C h^2 by least squares on the finest three, weighted by 1/ci^2
+    f = sorted(pts)[:3]
+    w = [1 / (c * c) for _, _, c in f]
+    X = [h * h for h, _, _ in f]
+    Y = [d for _, d, _ in f]
+    sw = sum(w); sx = sum(wi * x for wi, x in zip(w, X)); sy = sum(wi * y for wi, y in zip(w, Y))
+    sxx = sum(wi * x * x for wi, x in zip(w, X)); sxy = sum(wi * x * y for wi, x, y in zip(w, X, Y))
+    C = (sw * sxy - sx * sy) / (sw * sxx - sx * sx)
+    D0 = (sy - C * sx) / sw
+    fit = ("Second-order fit DC(h) = DC0 + C h^2 through the three finest spacings (weights 1/ci95^2): "
+           "DC0 = %.4f, C = %+.4f per cm^2." % (D0, C))
+text = ["<!-- ensemble-bench begin: written by scripts/bench-ensemble.sh; do not edit -->",
+        "", "Regenerated by `make bench-ensemble` (drape %s). Accurate: `--method dynamic "
+        "--integrator auto` (rtol 1e-4) to equilibrium, %s specimens; fall: the default "
+        "method, %s specimens. (a) exact test of the node histograms p >= 0.05; (b) mean DC "
+        "within 0.01 and inside the accurate 95 %% interval; (c) at least 50 times less CPU "
+        "per specimen." % (commit, n_ref, n_fast), ""] + lines + ["", "Second accurate setting, default scene (item 2):", ""] + second + \
+       ["", "The fall method's ensemble against the lattice spacing, default scene (item 5):", ""] + sp + ["", fit, "", "Provenance:", ""] + prov + ["", "<!-- ensemble-bench end -->"]
+open(os.path.join(out, "table.md"), "w").write("\n".join(text) + "\n")
+p = "docs/performance.md"
+doc = open(p).read()
+block = "\n".join(text)
+if "<!-- ensemble-bench begin" in doc:
+    doc = re.sub(r"<!-- ensemble-bench begin.*?<!-- ensemble-bench end -->", lambda m: block, doc, flags=re.S)
+else:
+    doc = doc.rstrip("\n") + "\n\n## The drape test: accurate against fast ensembles (issue 15)\n\n" + block + "\n"
+open(p + ".tmp", "w").write(doc)
+os.replace(p + ".tmp", p)
+print("\n".join(lines))
+EOF
+echo "bench-ensemble: tables in $OUT/table.md and docs/performance.md"
