@@ -26,6 +26,8 @@
 #                 about 50 s of CPU per specimen at 1 cm); its .meta says
 #                 which commit made it
 #   BENCH_SPACINGS  spacings of the study (2cm 1cm 0.75cm 0.5cm; "" = none)
+#   BENCH_SPACING_SPECIMENS  specimens per spacing (16; at 0.5 cm a specimen
+#                 takes 10-80 s of CPU)
 #   DRAPE_BIN     the drape binary (./drape)
 # The accurate ensembles take 1-2 hours of CPU in all; the rest minutes.
 set -eu
@@ -38,6 +40,7 @@ JOBS=${BENCH_JOBS:-2}
 CASES=${BENCH_CASES:-"cotton-1cm cotton-poly-1cm jacket-1cm tablecloth-1cm cotton-2cm table-2cm"}
 SPACINGS=${BENCH_SPACINGS-"2cm 1cm 0.75cm 0.5cm"}
 REUSE=${BENCH_REUSE_ACCURATE:-0}
+N_SPACING=${BENCH_SPACING_SPECIMENS:-16}
 COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
 [ -z "$(git status --porcelain -- src include 2>/dev/null)" ] || COMMIT="$COMMIT+changes"
 mkdir -p "$OUT"
@@ -97,7 +100,7 @@ esac
 # item 5: the fall ensemble against the spacing
 for h in $SPACINGS; do
     # shellcheck disable=SC2046
-    run "spacing-$h-fall" $(case_args "spacing-$h") --specimens "$N_FAST" -j "$JOBS"
+    run "spacing-$h-fall" $(case_args "spacing-$h") --specimens "$N_SPACING" -j "$JOBS"
 done
 
 python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS" <<'EOF'

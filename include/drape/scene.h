@@ -164,6 +164,9 @@ int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
  * times of their skirt. */
 #define DRAPE_FALL_TIME_FACTOR 10.0
 #define DRAPE_FALL_STEP_FACTOR 0.03125
+/* Iterations of the static solver after the fall (the static method keeps
+ * its 500; docs/ensemble.md). */
+#define DRAPE_FALL_MAX_ITERS 2000
 void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s);
 
 /* Names for output. */
