@@ -167,6 +167,9 @@ int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
 /* Iterations of the static solver after the fall (the static method keeps
  * its 500; docs/ensemble.md). */
 #define DRAPE_FALL_MAX_ITERS 2000
+/* After the fall a certified minimum whose residual stalls (roundoff) below
+ * this multiple of the static tolerance counts as the rest state. */
+#define DRAPE_FALL_FLOOR 100.0
 void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s);
 
 /* Names for output. */
