@@ -149,6 +149,12 @@ for c in cases:
             prov.append("- `%s-%s`: `%s` (drape %s, %s; %s CPU s, %s s wall)" % (
                 c, k, m.get("command", "?"), m.get("commit", "?"), m.get("date", "?"),
                 m.get("cpu_s", "?"), m.get("wall_s", "?")))
+for h in spacings.split():
+    m = meta("spacing-%s-fall" % h)
+    if m:
+        prov.append("- `spacing-%s-fall`: `%s` (drape %s, %s; %s CPU s, %s s wall)" % (
+            h, m.get("command", "?"), m.get("commit", "?"), m.get("date", "?"),
+            m.get("cpu_s", "?"), m.get("wall_s", "?")))
 imex = load("cotton-1cm-imex-compare.json")
 second = []
 if imex:
