@@ -515,9 +515,9 @@ int drape_cli_specimens_run(const run_args *a)
     }
     if (interrupted) {
         int sig = ens_stop > 0 ? (int)ens_stop : SIGINT;
-        fprintf(stderr, "drape: interrupted by %s after %d of %d specimens (an ensemble is not "
-                "resumable: run it again)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
-                n_done, n);
+        fprintf(stderr, "drape: interrupted by %s with %d of %d specimens finished (an ensemble "
+                "is not resumable: run it again)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
+                st.n, n);
         status = 128 + sig;
     } else if (st.n == 0) {
         fprintf(stderr, "drape: every specimen failed\n");

@@ -147,6 +147,12 @@ enum {
 int drape_scene_load_flags(const char *path, unsigned flags, drape_scene *s,
                            drape_error *err, drape_warn_fn warn, void *warn_ctx);
 
+/* Checks across keys that need no fabric (scene_check.c): the shape the
+ * kind needs, a spacing the specimen can hold, support or table inside
+ * the specimen, overhang shorter than the strip.  drape_scene_load runs
+ * them; errors name the scene file and key. */
+int drape_scene_check_geometry(const drape_scene *s, drape_error *err);
+
 /* Checks that need both files: support or table larger than the specimen,
  * overhang longer than the strip, pins outside the lattice, a lattice that
  * would not fit in memory (estimated before allocating).  Errors name the

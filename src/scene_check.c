@@ -1,0 +1,251 @@
+/* scene_check.c: what a loaded scene's geometry implies (scene.h): sizes
+ * that must fit together (support or table inside the specimen, overhang
+ * shorter than the strip, a spacing the specimen can hold), the lattice
+ * it will build and the memory that takes, pins inside it, and the fall
+ * method's time scale.  Errors name the scene file, line and key of the
+ * value at fault (drape_scene_pos).  scene.c reads the file key by key.
+ *
+ * Lattice size (used for pins and the memory estimate; it must agree with
+ * the lattice builder, MODEL.md section 2): a side of length W at spacing s
+ * holds floor(W/s + 1e-9) + 1 particles (the 1e-9 absorbs rounding in W/s,
+ * e.g. 0.30/0.01 = 29.999999999999996); a circle of diameter d is centred on
+ * a lattice point and holds about pi (d / 2s)^2 particles.
+ *
+ * Memory estimate: about SCENE_BYTES_PER_PARTICLE = 2 KiB per particle for
+ * the model (state, masses, elements) and the sparse Jacobian (a particle
+ * couples to about 21 others through bending hinges: ~190 nonzeros of
+ * 8 + 4 bytes in K, twice that in the first-order system, plus integrator
+ * vectors); direct-solver fill-in comes on top.  Scenes above 8 GiB or 20
+ * million particles are refused before anything is allocated.
+ */
+#include "drape/scene.h"
+
+#include <math.h>
+#include <stdio.h>
+
+#include "drape/units.h"
+
+/* Lattice counting slack and memory limits (see the header comment). */
+#define SCENE_GRID_EPS 1e-9
+#define SCENE_PI 3.14159265358979323846
+#define SCENE_BYTES_PER_PARTICLE 2048.0
+#define SCENE_MAX_BYTES (8.0 * 1024.0 * 1024.0 * 1024.0)
+#define SCENE_MAX_PARTICLES 2.0e7
+
+/* A length in SI, formatted in a readable unit ("18 cm", "2.5 mm"). */
+static const char *fmt_len(double m, char *buf, size_t n)
+{
+    double a = fabs(m);
+    if (a >= 1.0 || a == 0.0)
+        snprintf(buf, n, "%.4g m", m);
+    else if (a >= 1e-2)
+        snprintf(buf, n, "%.4g cm", m * 1e2);
+    else if (a >= 1e-3)
+        snprintf(buf, n, "%.4g mm", m * 1e3);
+    else
+        snprintf(buf, n, "%.4g um", m * 1e6);
+    return buf;
+}
+
+/* ------------------------------------------------------------------ */
+/* Checks across keys (also run by drape_scene_check_with_fabric)      */
+
+static int pos_error(drape_error *err, const drape_scene *s,
+                     drape_scene_pos p, const char *key,
+                     drape_error_kind kind, const char *msg)
+{
+    return drape_error_set(err, kind, s->path, p.line, p.column, key, "%s",
+                           msg);
+}
+
+/* Particles along a side of length w at spacing sp (MODEL.md 2). */
+static double grid_count(double w, double sp)
+{
+    return floor(w / sp + SCENE_GRID_EPS) + 1.0;
+}
+
+/* Bounding grid (ni along the weft, nj along the warp) and particle count
+ * estimate, in double so absurd spacings do not overflow. */
+static void grid_size(const drape_scene *s, double *ni, double *nj,
+                      double *np)
+{
+    double sp = s->spacing;
+    switch (s->shape) {
+    case DRAPE_SHAPE_RECTANGLE:
+        *ni = grid_count(s->width, sp);
+        *nj = grid_count(s->height, sp);
+        *np = *ni * *nj;
+        break;
+    case DRAPE_SHAPE_STRIP:
+        if (s->strip_dir == DRAPE_WARP) {
+            *ni = grid_count(s->width, sp);
+            *nj = grid_count(s->length, sp);
+        } else {
+            *ni = grid_count(s->length, sp);
+            *nj = grid_count(s->width, sp);
+        }
+        *np = *ni * *nj;
+        break;
+    default: {
+        double r = 0.5 * s->diameter / sp;
+        *ni = *nj = 2.0 * floor(r + SCENE_GRID_EPS) + 1.0;
+        *np = SCENE_PI * r * r;
+        break;
+    }
+    }
+}
+
+int drape_scene_check_geometry(const drape_scene *s, drape_error *err)
+{
+    static const drape_shape want[] = {DRAPE_SHAPE_CIRCLE,
+                                       DRAPE_SHAPE_RECTANGLE,
+                                       DRAPE_SHAPE_RECTANGLE,
+                                       DRAPE_SHAPE_STRIP};
+    char msg[DRAPE_ERROR_MSG_MAX], a[32], b[32], d[32];
+    double sp = s->spacing, lim;
+    const char *what;
+
+    if ((int)s->kind < 0 || (int)s->kind > (int)DRAPE_SCENE_CANTILEVER ||
+        s->shape != want[s->kind])
+        return pos_error(err, s, s->at_specimen, "specimen.shape",
+                         DRAPE_E_INPUT,
+                         "the specimen's shape does not suit the scene");
+    if (!(isfinite(sp) && sp > 0.0)) {
+        snprintf(msg, sizeof msg, "expected a positive length, got %g m", sp);
+        return pos_error(err, s, s->at_spacing, "spacing", DRAPE_E_INPUT, msg);
+    }
+    /* At least two particles across every dimension (a circle: three
+     * across its diameter). */
+    switch (s->shape) {
+    case DRAPE_SHAPE_RECTANGLE:
+        lim = fmin(s->width, s->height);
+        what = s->width <= s->height ? "width" : "height";
+        break;
+    case DRAPE_SHAPE_STRIP:
+        lim = fmin(s->width, s->length);
+        what = s->width <= s->length ? "width" : "length";
+        break;
+    default:
+        lim = 0.5 * s->diameter;
+        what = "radius";
+        break;
+    }
+    if (sp > lim * (1.0 + SCENE_GRID_EPS)) {
+        snprintf(msg, sizeof msg,
+                 "expected a spacing at most the specimen's %s (%s), got %s",
+                 what, fmt_len(lim, a, sizeof a), fmt_len(sp, b, sizeof b));
+        return pos_error(err, s, s->at_spacing, "spacing", DRAPE_E_INPUT, msg);
+    }
+    switch (s->kind) {
+    case DRAPE_SCENE_CUSICK:
+        if (!(s->support_diameter < s->diameter)) {
+            snprintf(msg, sizeof msg,
+                     "expected a support diameter smaller than the "
+                     "specimen's diameter (%s), got %s",
+                     fmt_len(s->diameter, a, sizeof a),
+                     fmt_len(s->support_diameter, b, sizeof b));
+            return pos_error(err, s, s->at_support, "support.diameter",
+                             DRAPE_E_INPUT, msg);
+        }
+        break;
+    case DRAPE_SCENE_TABLE:
+        if (!(s->table_size < s->width && s->table_size < s->height)) {
+            snprintf(msg, sizeof msg,
+                     "expected a table smaller than the specimen (%s x %s) "
+                     "on both sides, got %s %s",
+                     fmt_len(s->width, a, sizeof a),
+                     fmt_len(s->height, b, sizeof b),
+                     s->table_shape == DRAPE_TABLE_SQUARE ? "side"
+                                                          : "diameter",
+                     fmt_len(s->table_size, d, sizeof d));
+            return pos_error(err, s, s->at_table,
+                             s->table_shape == DRAPE_TABLE_SQUARE
+                                 ? "table.side"
+                                 : "table.diameter",
+                             DRAPE_E_INPUT, msg);
+        }
+        break;
+    case DRAPE_SCENE_CANTILEVER:
+        if (!(s->overhang < s->length)) {
+            snprintf(msg, sizeof msg,
+                     "expected an overhang shorter than the strip's length "
+                     "(%s), got %s",
+                     fmt_len(s->length, a, sizeof a),
+                     fmt_len(s->overhang, b, sizeof b));
+            return pos_error(err, s, s->at_overhang, "overhang",
+                             DRAPE_E_INPUT, msg);
+        }
+        break;
+    default:
+        break;
+    }
+    return 0;
+}
+
+void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s)
+{
+    double h;
+    switch (s->kind) {
+    case DRAPE_SCENE_CUSICK: h = 0.5 * (s->diameter - s->support_diameter); break;
+    case DRAPE_SCENE_TABLE: {
+        double w = s->shape == DRAPE_SHAPE_CIRCLE ? s->diameter : s->width;
+        double l = s->shape == DRAPE_SHAPE_CIRCLE ? s->diameter : s->height;
+        h = 0.5 * ((w > l ? w : l) - s->table_size);
+        break;
+    }
+    case DRAPE_SCENE_CANTILEVER: h = s->overhang; break;
+    default: h = s->shape == DRAPE_SHAPE_CIRCLE ? s->diameter : s->height; break;
+    }
+    if (!(h > 0.0)) h = s->spacing;
+    double tau = sqrt(h / DRAPE_G_STANDARD);
+    *time_s = s->fall_time > 0.0 ? s->fall_time : DRAPE_FALL_TIME_FACTOR * tau;
+    *step_s = s->fall_step > 0.0 ? s->fall_step : DRAPE_FALL_STEP_FACTOR * tau;
+}
+
+int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
+                                  drape_error *err)
+{
+    char msg[DRAPE_ERROR_MSG_MAX], a[32];
+    double ni, nj, np, bytes;
+
+    if (!s || !f)
+        return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                               "drape_scene_check_with_fabric: NULL argument");
+    if (drape_scene_check_geometry(s, err)) return -1;
+
+    /* Memory, estimated in double before anything is allocated. */
+    grid_size(s, &ni, &nj, &np);
+    bytes = np * SCENE_BYTES_PER_PARTICLE;
+    if (np > SCENE_MAX_PARTICLES || bytes > SCENE_MAX_BYTES) {
+        snprintf(msg, sizeof msg,
+                 "spacing %s gives ~%.2g particles, ~%.3g GiB at ~%.0f KiB "
+                 "per particle; the limit is %.0f million particles and "
+                 "%.0f GiB",
+                 fmt_len(s->spacing, a, sizeof a), np,
+                 bytes / (1024.0 * 1024.0 * 1024.0),
+                 SCENE_BYTES_PER_PARTICLE / 1024.0, SCENE_MAX_PARTICLES / 1e6,
+                 SCENE_MAX_BYTES / (1024.0 * 1024.0 * 1024.0));
+        return pos_error(err, s, s->at_spacing, "spacing", DRAPE_E_NOMEM,
+                         msg);
+    }
+
+    /* Pins inside the bounding grid; -1 is the last index. */
+    if (s->n_pins < 0 || s->n_pins > DRAPE_SCENE_MAX_PINS)
+        return drape_error_set(err, DRAPE_E_INTERNAL, s->path, 0, 0, "pins",
+                               "n_pins = %d out of range", s->n_pins);
+    for (int k = 0; k < s->n_pins; k++) {
+        int i = s->pins[k][0], j = s->pins[k][1];
+        long li = (long)ni, lj = (long)nj;
+        if (i < -li || i >= li || j < -lj || j >= lj) {
+            char key[32];
+            snprintf(key, sizeof key, "pins[%d]", k);
+            snprintf(msg, sizeof msg,
+                     "pin [%d, %d] is outside the %ld x %ld lattice (i in "
+                     "%ld..%ld along the width, j in %ld..%ld along the "
+                     "height; -1 is the last)",
+                     i, j, li, lj, -li, li - 1, -lj, lj - 1);
+            return pos_error(err, s, s->at_pins, key, DRAPE_E_INPUT, msg);
+        }
+    }
+    return 0;
+}
