@@ -467,6 +467,21 @@ START_TEST(test_interrupt_static)
 }
 END_TEST
 
+/* An ensemble stops on SIGTERM sent to drape alone: the parent passes it
+ * to the running specimens, prints the ensemble with status interrupted and
+ * exits 143; no specimen counts as failed. */
+START_TEST(test_interrupt_ensemble)
+{
+    const char *a[] = {"run", "-q", "../scenes/cusick.yaml", "--spacing", "2cm", "--method",
+                       "dynamic", "--specimens", "4", "-j", "2", NULL};
+    int code = run_and_signal(NULL, SIGTERM, a);
+    ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
+    ck_assert_msg(strstr(err, "not resumable"), "%s", err);
+    ck_assert_int_eq((int)json_num(out, "specimens_failed"), 0);
+}
+END_TEST
+
 START_TEST(test_interrupt_and_resume)
 {
     const char *scene = ir_scene();
@@ -732,6 +747,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_cusick_dynamic_equilibrium);
     tcase_add_test(tc, test_interrupt_within_interval);
     tcase_add_test(tc, test_interrupt_static);
+    tcase_add_test(tc, test_interrupt_ensemble);
     tcase_add_test(tc, test_imex_limp_fold);
     tcase_add_test(tc, test_interrupt_and_resume);
     tcase_add_test(tc, test_resume_refusals);
