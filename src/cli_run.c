@@ -74,7 +74,7 @@ static const char run_usage[] =
     "r_max_m, cpu_s; CSV: the count), specimens_failed, seed (the first), cpu_s\n"
     "(CPU seconds, child processes included); counters are summed over the\n"
     "specimens, energies and radii averaged (docs/ensemble.md).  The shipped\n"
-    "Cusick and table scenes ask for 12.\n"
+    "Cusick scene asks for 12, the table scene for 28.\n"
     "\n"
     "Options (override the scene file):\n"
     "  --fabric FILE            fabric file instead of the scene's\n"

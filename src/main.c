@@ -21,7 +21,7 @@ static const char usage_text[] =
     "                       summary (masses, Kawabata curves, bending lengths,\n"
     "                       stiffness bounds)\n"
     "  run [SCENE.yaml]     run a scene (default scenes/cusick.yaml: a drape\n"
-    "                       test of 10 specimens); one JSON object on stdout;\n"
+    "                       test of 12 specimens); one JSON object on stdout;\n"
     "                       `drape run --help` for options\n"
     "  batch SCENE.yaml FABRIC.yaml...\n"
     "                       run a scene once per fabric, N at a time; one CSV\n"
