@@ -126,12 +126,12 @@ t_run=$(date +%s)
 [ "$rc" = 6 ] || fail "submit.sh exit status $rc, expected 6 (one invalid fabric)"
 [ -f "$w/out/results.csv" ] || fail "no merged results.csv"
 
-# the same batch locally: the same rows, but for the timing column wall_s
+# the same batch locally: the same rows, but for the timing columns wall_s, cpu_s
 "$DRAPE" batch -q scenes/hang.yaml "${fabrics[@]}" "${run[@]}" --out "$w/local"
 lrc=$?
 [ "$lrc" = 6 ] || fail "local drape batch exit status $lrc, expected 6"
-strip() { # blank the timing column wall_s (no field before it holds a comma)
-    awk -F, -v OFS=, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "wall_s") c = i } { $c = ""; print }' "$1"
+strip() { # blank the timing columns wall_s and cpu_s (no field before them holds a comma)
+    awk -F, -v OFS=, 'NR == 1 { for (i = 1; i <= NF; i++) { if ($i == "wall_s") c = i; if ($i == "cpu_s") d = i } } { $c = ""; $d = ""; print }' "$1"
 }
 if ! diff <(strip "$w/local/results.csv") <(strip "$w/out/results.csv") >&2; then
     fail "merged rows differ from a local batch"
