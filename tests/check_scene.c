@@ -1021,6 +1021,33 @@ START_TEST(test_bad_files)
 }
 END_TEST
 
+/* The fall method's time scale: the pendulum time sqrt(h / g) of the free
+ * length h (Cusick (D - d)/2 = 6 cm, table (60 - 36)/2 = 12 cm), 10 of
+ * them for the fall and 1/32 of one per step; the scene's keys win. */
+START_TEST(test_fall_params)
+{
+    drape_scene s;
+    double t, h;
+    load_example("scenes/cusick.yaml", &s);
+    ck_assert_int_eq(s.specimens, 12);
+    ck_assert_int_eq(s.method, DRAPE_METHOD_DEFAULT);
+    drape_scene_fall_params(&s, &t, &h);
+    ck_assert_close_rel(t, 10.0 * sqrt(0.06 / 9.80665), 1e-12);
+    ck_assert_close_rel(h, sqrt(0.06 / 9.80665) / 32.0, 1e-12);
+    load_example("scenes/table.yaml", &s);
+    ck_assert_int_eq(s.specimens, 28);
+    drape_scene_fall_params(&s, &t, &h);
+    ck_assert_close_rel(t, 10.0 * sqrt(0.12 / 9.80665), 1e-12);
+    s.fall_time = 0.3;
+    s.fall_step = 0.004;
+    drape_scene_fall_params(&s, &t, &h);
+    ck_assert_double_eq(t, 0.3);
+    ck_assert_double_eq(h, 0.004);
+    load_example("scenes/hang.yaml", &s);
+    ck_assert_int_eq(s.specimens, 1); /* no key: one specimen */
+}
+END_TEST
+
 Suite *scene_suite(void)
 {
     Suite *s = suite_create("scene");
@@ -1032,6 +1059,7 @@ Suite *scene_suite(void)
     tcase_add_test(tc, test_cantilever);
     tcase_add_test(tc, test_names);
     tcase_add_test(tc, test_defaults);
+    tcase_add_test(tc, test_fall_params);
     tcase_add_test(tc, test_options);
     tcase_add_test(tc, test_strain_limit);
     tcase_add_test(tc, test_fabric_relative);
