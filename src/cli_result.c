@@ -61,7 +61,7 @@ static int same_key(const char *a, const char *b)
     return !*a && !*b;
 }
 
-drape_cli_field *drape_cli_result_find(drape_cli_result *r, const char *key)
+const drape_cli_field *drape_cli_result_find(const drape_cli_result *r, const char *key)
 {
     for (int i = 0; i < r->n; i++)
         if (same_key(r->f[i].key, key)) return &r->f[i];
@@ -92,10 +92,7 @@ static json_object *json_num(double v, int is_int)
 {
     if (!isfinite(v) || (is_int && v < 0)) return NULL; /* null */
     char buf[40];
-    if (is_int) {
-        snprintf(buf, sizeof buf, "%.0f", v);
-        return json_object_new_int64((int64_t)llround(v));
-    }
+    if (is_int) return json_object_new_int64((int64_t)llround(v));
     snprintf(buf, sizeof buf, "%.10g", v);
     return json_object_new_double_s(v, buf);
 }

@@ -61,7 +61,7 @@ void drape_cli_result_hist(drape_cli_result *r, const char *key);
 void drape_cli_result_specimens(drape_cli_result *r, const char *key);
 
 /* The field named key, or NULL. */
-drape_cli_field *drape_cli_result_find(drape_cli_result *r, const char *key);
+const drape_cli_field *drape_cli_result_find(const drape_cli_result *r, const char *key);
 /* Its number (NaN when absent, null or text). */
 double drape_cli_result_get(const drape_cli_result *r, const char *key);
 

@@ -800,10 +800,11 @@ int drape_cli_run(int argc, char **argv)
                 return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'%s", optarg, "");
             break;
         case O_METHOD:
-            if (strcmp(optarg, "dynamic") == 0) method = DRAPE_METHOD_DYNAMIC;
-            else if (strcmp(optarg, "static") == 0) method = DRAPE_METHOD_STATIC;
-            else if (strcmp(optarg, "fall") == 0) method = DRAPE_METHOD_FALL;
-            else return usage_error("--method: expected fall, dynamic or static, got `%s'%s", optarg, "");
+            method = DRAPE_METHOD_DEFAULT;
+            for (int k = 1; drape_method_names[k]; k++)
+                if (strcmp(optarg, drape_method_names[k]) == 0) method = k;
+            if (method == DRAPE_METHOD_DEFAULT)
+                return usage_error("--method: expected fall, dynamic or static, got `%s'%s", optarg, "");
             break;
         case O_SPECIMENS:
             if (parse_count(optarg, 1, DRAPE_SCENE_SPECIMENS_MAX, &ra.specimens) != 0)
@@ -826,13 +827,13 @@ int drape_cli_run(int argc, char **argv)
             break;
         }
         case O_FALLTIME:
-            if (parse_quantity("--fall-time", optarg, DRAPE_DIM_TIME, &ra.fall_time)) return 2;
-            if (!(ra.fall_time > 0)) return usage_error("--fall-time: must be positive, got %s%s", optarg, "");
+        case O_FALLSTEP: {
+            const char *name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
+            double *v = c == O_FALLTIME ? &ra.fall_time : &ra.fall_step;
+            if (parse_quantity(name, optarg, DRAPE_DIM_TIME, v)) return 2;
+            if (!(*v > 0)) return usage_error("%s: must be positive, got %s", name, optarg);
             break;
-        case O_FALLSTEP:
-            if (parse_quantity("--fall-step", optarg, DRAPE_DIM_TIME, &ra.fall_step)) return 2;
-            if (!(ra.fall_step > 0)) return usage_error("--fall-step: must be positive, got %s%s", optarg, "");
-            break;
+        }
         case O_MAXSTEPS: {
             char *end;
             errno = 0;

@@ -205,19 +205,19 @@ static void parse_child(child *c)
 
 /* ---- the ensemble's result ---------------------------------------------------- */
 
-static int spec_ok(const child *c)
-{
-    if (!c->have_res) return 0;
-    const drape_cli_field *f = drape_cli_result_find((drape_cli_result *)&c->res, "status");
-    return f && f->type == DRAPE_CLI_F_STR &&
-           (strcmp(f->text, "equilibrium") == 0 || strcmp(f->text, "t_max") == 0);
-}
-
+/* The status a specimen reported ("failed" when it reported nothing). */
 static const char *spec_status(const child *c)
 {
     const drape_cli_field *f =
-        c->have_res ? drape_cli_result_find((drape_cli_result *)&c->res, "status") : NULL;
+        c->have_res ? drape_cli_result_find(&c->res, "status") : NULL;
     return f && f->type == DRAPE_CLI_F_STR ? f->text : "failed";
+}
+
+/* 1 if the specimen produced a result (equilibrium or t_max). */
+static int spec_ok(const child *c)
+{
+    const char *s = spec_status(c);
+    return strcmp(s, "equilibrium") == 0 || strcmp(s, "t_max") == 0;
 }
 
 static void combine(drape_cli_result *out, const char *key, const drape_cli_field *proto,
@@ -263,7 +263,7 @@ static void build_result(drape_cli_result *r, child *ch, int n, const child *fir
         if (strncmp(key, "energy_J_", 9) == 0) snprintf(jkey, sizeof jkey, "energy_J.%s", key + 9);
         else snprintf(jkey, sizeof jkey, "%s", key);
         const drape_cli_field *proto =
-            first ? drape_cli_result_find((drape_cli_result *)&first->res, key) : NULL;
+            first ? drape_cli_result_find(&first->res, key) : NULL;
         int rule = rule_of(key);
         if (strcmp(key, "status") == 0) {
             drape_cli_result_str(r, jkey, interrupted ? "interrupted"
@@ -318,8 +318,8 @@ int drape_cli_write_shadow(const char *dir, const drape_scene *s,
 {
     char path[4200], title[512];
     snprintf(path, sizeof path, "%s/shadow.svg", dir);
-    const drape_cli_field *fab = drape_cli_result_find((drape_cli_result *)r, "fabric");
-    const drape_cli_field *meth = drape_cli_result_find((drape_cli_result *)r, "method");
+    const drape_cli_field *fab = drape_cli_result_find(r, "fabric");
+    const drape_cli_field *meth = drape_cli_result_find(r, "method");
     snprintf(title, sizeof title, "%s, %s, %s, spacing %g cm",
              fab && fab->type == DRAPE_CLI_F_STR ? fab->text : "",
              drape_scene_kind_name(s->kind),

@@ -745,9 +745,10 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
     }
     if ((v = drape_ynode_get(m, "method", NULL)) != NULL) {
         int k;
-        if (parse_enum(c, v, "solver.method", drape_method_names, &k))
+        /* "default" is what an absent key means, not a value to write */
+        if (parse_enum(c, v, "solver.method", drape_method_names + 1, &k))
             return -1;
-        s->method = (drape_method)k;
+        s->method = (drape_method)(k + 1);
     }
     if ((v = drape_ynode_get(m, "fall_time", NULL)) != NULL &&
         parse_quantity(c, v, "solver.fall_time", DRAPE_DIM_TIME, "time",
