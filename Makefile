@@ -22,14 +22,21 @@
 #   make clean
 
 CC      ?= cc
+# Installation (GNU conventions; `make install PREFIX=/opt/drape
+# DESTDIR=/tmp/stage`): the binary, drape.1, the shipped data (read by the
+# binary from DATADIR, compiled in; DRAPE_DATA overrides it) and the docs.
 PREFIX  ?= /usr/local
 BINDIR  ?= $(PREFIX)/bin
+DATADIR ?= $(PREFIX)/share/drape
+DOCDIR  ?= $(PREFIX)/share/doc/drape
+MANDIR  ?= $(PREFIX)/share/man
+MAN1DIR ?= $(MANDIR)/man1
 CFLAGS  ?= -O3 -g
 LDFLAGS ?=
 
 DEB_PACKAGES = libgsl-dev libsundials-dev libsuitesparse-dev libhdf5-dev \
                libyaml-dev check pkg-config libopenblas-dev \
-               libgeos-dev libjson-c-dev libxml2-dev
+               libgeos-dev libjson-c-dev libxml2-dev help2man man-db
 
 # Flags drape itself needs (not overridable: the language level is part of
 # the code).  pkg-config is expanded lazily, so `make deps all` works on a
@@ -66,8 +73,8 @@ TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/
 HEADERS  = $(wildcard include/drape/*.h)
 
 .PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
-        bench-ensemble \
-        asan valgrind fuzz install clean
+        bench-ensemble check-install \
+        asan valgrind fuzz install uninstall clean FORCE
 
 all: drape
 
@@ -93,6 +100,16 @@ $(O)/drape: $(CLI_OBJ) $(O)/libdrape.a
 $(O)/src/%.o: src/%.c $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -c -o $@ $<
+
+# The compiled-in data directory (src/cli_data.h): rewritten only when
+# DATADIR changes, so `make install PREFIX=...` rebuilds what depends on it.
+$(O)/gen/datadir.gen.h: FORCE
+	@mkdir -p $(dir $@)
+	@printf '#define DRAPE_DATADIR "%s"\n' '$(DATADIR)' > $@.tmp; \
+	if cmp -s $@.tmp $@; then rm -f $@.tmp; else mv $@.tmp $@; fi
+$(O)/src/cli_data.o: $(O)/gen/datadir.gen.h src/cli_data.h
+$(O)/src/cli_data.o: ALL_CFLAGS += -I$(O)/gen
+FORCE:
 
 $(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h tests/elastica.h tests/fixture.h $(O)/tests/suites.gen.h
 	@mkdir -p $(dir $@)
@@ -157,9 +174,39 @@ validate: drape
 check-slurm: drape
 	scripts/check-slurm.sh
 
-install: drape
-	install -d $(DESTDIR)$(BINDIR)
-	install -m 755 drape $(DESTDIR)$(BINDIR)/drape
+# The manual page, generated from --help (scripts/man.sh, help2man).
+$(O)/drape.1: $(O)/drape scripts/man.sh README.md
+	scripts/man.sh $(O)/drape README.md $(DATADIR) $(DOCDIR) > $@.tmp && mv $@.tmp $@
+
+DATA_FILES = $(wildcard fabrics/*.yaml scenes/*.yaml)
+DOC_FILES  = README.md $(shell find docs -type f | LC_ALL=C sort)
+
+# (the installed binary is $(O)/drape, the same objects as ./drape, so
+# that `make install O=... PREFIX=...` leaves the checkout's ./drape alone)
+install: $(O)/drape $(O)/drape.1
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(MAN1DIR)
+	install -m 755 $(O)/drape $(DESTDIR)$(BINDIR)/drape
+	install -m 644 $(O)/drape.1 $(DESTDIR)$(MAN1DIR)/drape.1
+	@for f in $(DATA_FILES); do \
+	  install -D -m 644 "$$f" "$(DESTDIR)$(DATADIR)/$$f" || exit 1; done
+	@for f in $(DOC_FILES); do \
+	  install -D -m 644 "$$f" "$(DESTDIR)$(DOCDIR)/$$f" || exit 1; done
+	@echo "installed drape in $(DESTDIR)$(BINDIR), data in $(DESTDIR)$(DATADIR)," \
+	  "docs in $(DESTDIR)$(DOCDIR), drape.1 in $(DESTDIR)$(MAN1DIR)"
+
+# Exactly what install wrote (the same lists), then the directories of
+# drape's own that are left empty.
+uninstall:
+	rm -f $(DESTDIR)$(BINDIR)/drape $(DESTDIR)$(MAN1DIR)/drape.1
+	@for f in $(DATA_FILES); do rm -f "$(DESTDIR)$(DATADIR)/$$f"; done
+	@for f in $(DOC_FILES); do rm -f "$(DESTDIR)$(DOCDIR)/$$f"; done
+	@for d in $(DESTDIR)$(DATADIR) $(DESTDIR)$(DOCDIR); do \
+	  if [ -d "$$d" ]; then find "$$d" -depth -type d -empty -delete; fi; done
+
+# A staged install (DESTDIR) used from another directory, its manual
+# page rendered, and the uninstall (scripts/check-install.sh).
+check-install: drape
+	scripts/check-install.sh
 
 clean:
 	rm -rf drape build

@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_data.h"
 #include "cli_io.h"
 #include "drape/alloc.h"
 #include "drape/fabric.h"
@@ -721,11 +722,18 @@ int drape_cli_batch(int argc, char **argv)
         long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
         jobs = ncpu > 0 ? (ncpu < BATCH_MAX_JOBS ? ncpu : BATCH_MAX_JOBS) : 1;
     }
-    b.scene = argv[optind];
     b.progress = !quiet && isatty(STDERR_FILENO);
 
     drape_error err;
     drape_error_clear(&err);
+    /* the scene, and below the fabrics, may come from the data directories
+     * (cli_data.h); each run resolves its --fabric the same way */
+    char scene_buf[4096];
+    if (drape_cli_data_find(argv[optind], scene_buf, sizeof scene_buf, &err) != 0) {
+        drape_cli_print_error(&err);
+        return drape_error_exit_status(err.kind);
+    }
+    b.scene = scene_buf;
     int status = 0;
     struct sigaction sa_old_int, sa_old_term;
     int handlers = 0;
@@ -743,7 +751,9 @@ int drape_cli_batch(int argc, char **argv)
         drape_fabric fab;
         drape_error fe;
         drape_error_clear(&fe);
-        if (drape_fabric_load(argv[i], &fab, &fe, NULL, NULL) != 0) continue;
+        char fab_buf[4096];
+        if (drape_cli_data_find(argv[i], fab_buf, sizeof fab_buf, &fe) != 0 ||
+            drape_fabric_load(fab_buf, &fab, &fe, NULL, NULL) != 0) continue;
         if (drape_scene_check_with_fabric(&s, &fab, &err) != 0) goto fail;
         break;
     }

@@ -26,6 +26,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_data.h"
 #include "cli_io.h"
 #include "drape/alloc.h"
 #include "drape/drape.h"
@@ -676,7 +677,7 @@ static void csv_path(bench *b, const char *name, const char *fallback)
     } else {
         const char *base = strrchr(fallback, '/');
         base = base ? base + 1 : fallback;
-        snprintf(stem, sizeof stem, "%s", base);
+        snprintf(stem, sizeof stem, "%.200s", base); /* a file name: long ones shortened */
         char *dot = strrchr(stem, '.');
         if (dot && (strcmp(dot, ".yaml") == 0 || strcmp(dot, ".yml") == 0)) *dot = 0;
     }
@@ -1093,6 +1094,14 @@ int drape_cli_bench(int argc, char **argv)
                              : kernels ? BENCH_KERNEL_SCENE : BENCH_DEFAULT_SCENE;
     drape_error err;
     drape_error_clear(&err);
+    char scene_buf[4096], fabric_buf[4096]; /* cli_data.h */
+    if (drape_cli_data_find(scene_path, scene_buf, sizeof scene_buf, &err) != 0 ||
+        (fabric_path && drape_cli_data_find(fabric_path, fabric_buf, sizeof fabric_buf, &err) != 0)) {
+        drape_cli_print_error(&err);
+        return drape_error_exit_status(err.kind);
+    }
+    scene_path = scene_buf;
+    if (fabric_path) fabric_path = fabric_buf;
     bench b;
     memset(&b, 0, sizeof b);
     b.scene_path = scene_path;
@@ -1102,7 +1111,11 @@ int drape_cli_bench(int argc, char **argv)
 
     if (drape_scene_load_flags(scene_path, fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u, &b.s,
                                &err, drape_cli_warn, NULL) != 0) goto fail;
-    if (fabric_path) snprintf(b.s.fabric_path, sizeof b.s.fabric_path, "%s", fabric_path);
+    if (fabric_path &&
+        (size_t)snprintf(b.s.fabric_path, sizeof b.s.fabric_path, "%s", fabric_path) >= sizeof b.s.fabric_path) {
+        drape_error_set(&err, DRAPE_E_IO, fabric_path, 0, 0, NULL, "path too long");
+        goto fail;
+    }
     if (spacing > 0) b.s.spacing = spacing;
     if (max_order > 0) b.s.max_order = max_order;
     if (drape_fabric_load(b.s.fabric_path, &b.f, &err, drape_cli_warn, NULL) != 0) goto fail;

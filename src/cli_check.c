@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_data.h"
 #include "drape/fabric.h"
 #include "drape/lattice.h"
 #include "drape/model.h"
@@ -183,11 +184,13 @@ int drape_cli_check(int argc, char **argv)
         drape_error err;
         drape_error_clear(&err);
         int scene = 0, st;
-        if (is_scene(argv[i], &scene, &err) != 0) {
+        char path[4096]; /* a shipped file may come from the data directories */
+        if (drape_cli_data_find(argv[i], path, sizeof path, &err) != 0 ||
+            is_scene(path, &scene, &err) != 0) {
             drape_cli_print_error(&err);
             st = drape_error_exit_status(err.kind);
         } else {
-            st = scene ? check_scene(argv[i]) : check_fabric(argv[i]);
+            st = scene ? check_scene(path) : check_fabric(path);
         }
         if (st != 0 && status == 0) status = st;
     }

@@ -26,6 +26,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_data.h"
 #include "cli_io.h"
 #include "cli_resume.h"
 #include "cli_result.h"
@@ -397,7 +398,11 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (drape_scene_load_flags(scene_path, fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u, &s,
                                &err, resume_dir || ra->no_warnings ? NULL : drape_cli_warn, NULL) != 0)
         goto fail;
-    if (fabric_path) snprintf(s.fabric_path, sizeof s.fabric_path, "%s", fabric_path);
+    if (fabric_path &&
+        (size_t)snprintf(s.fabric_path, sizeof s.fabric_path, "%s", fabric_path) >= sizeof s.fabric_path) {
+        drape_error_set(&err, DRAPE_E_IO, fabric_path, 0, 0, NULL, "path too long");
+        goto fail;
+    }
     if (integrator) snprintf(s.integrator, sizeof s.integrator, "%s", integrator);
     if (rtol > 0) s.rtol = rtol;
     if (atol > 0) s.atol = atol;
@@ -866,7 +871,21 @@ int drape_cli_run(int argc, char **argv)
     if (resume_dir && run_opt)
         return usage_error("--resume: only --format and -q go with it (the run's options are "
                            "stored in %s/drape.h5), got `%s'", resume_dir, run_opt);
+    /* the default scene and paths not found here: the data directories
+     * (cli_data.h; a resumed run's paths are stored absolute) */
+    char scene_buf[4096], fabric_buf[4096];
     const char *scene_path = optind < argc ? argv[optind] : DEFAULT_SCENE;
+    if (!resume_dir) {
+        drape_error derr;
+        drape_error_clear(&derr);
+        if (drape_cli_data_find(scene_path, scene_buf, sizeof scene_buf, &derr) != 0 ||
+            (fabric_path && drape_cli_data_find(fabric_path, fabric_buf, sizeof fabric_buf, &derr) != 0)) {
+            drape_cli_print_error(&derr);
+            return drape_error_exit_status(derr.kind);
+        }
+        scene_path = scene_buf;
+        if (fabric_path) fabric_path = fabric_buf;
+    }
     if (integrator) {
         int ok = 0;
         for (int i = 0; drape_integrator_names[i]; i++)

@@ -8,6 +8,7 @@
 #include <gsl/gsl_errno.h>
 
 #include "cli.h"
+#include "cli_data.h"
 #include "drape/error.h"
 
 static const char usage_text[] =
@@ -45,18 +46,23 @@ static const char usage_text[] =
     "Quantities take the unit strings of the input files, with or without a\n"
     "space: --spacing '5 mm', --spacing 5mm; a bare number is SI.\n"
     "\n"
+    "Files: a relative path that names no file in the current directory (the\n"
+    "default scene, scenes/table.yaml, fabrics/denim-wang.yaml) is read from\n"
+    "drape's data directory: $DRAPE_DATA if set, else the checkout the binary\n"
+    "was built in, else the installed one; `drape --version' prints them.\n"
+    "\n"
     "Exit status:\n"
-    "  0   success\n"
-    "  1   invalid input (malformed YAML, bad key, type, unit or value)\n"
-    "  2   bad command line\n"
-    "  3   input/output error (missing or unreadable file, unwritable output)\n"
-    "  4   numerical failure (the run ended with status `failed`)\n"
-    "  5   out of memory, or a lattice too large to allocate\n"
-    "  6   drape batch: at least one run failed or could not run\n"
-    "  70  internal error (a bug in drape)\n"
-    "  130 interrupted by SIGINT (drape run: status `interrupted`, resumable\n"
-    "      with --resume; drape batch: finished rows kept)\n"
-    "  143 interrupted by SIGTERM (drape run, as above)\n";
+    "  0    success\n"
+    "  1    invalid input (malformed YAML, bad key, type, unit or value)\n"
+    "  2    bad command line\n"
+    "  3    input/output error (missing or unreadable file, unwritable output)\n"
+    "  4    numerical failure (the run ended with status `failed`)\n"
+    "  5    out of memory, or a lattice too large to allocate\n"
+    "  6    drape batch: at least one run failed or could not run\n"
+    "  70   internal error (a bug in drape)\n"
+    "  130  interrupted by SIGINT (drape run: status `interrupted`, resumable\n"
+    "       with --resume; drape batch: finished rows kept)\n"
+    "  143  interrupted by SIGTERM (drape run, as above)\n";
 
 /* drape is single-threaded by design: batch runs parallelise over
  * processes.  Debian's CHOLMOD runs its supernodal factorisation in OpenMP
@@ -94,7 +100,10 @@ int main(int argc, char **argv)
     while ((c = getopt_long(argc, argv, "+hV", opts, NULL)) != -1) {
         switch (c) {
         case 'h': fputs(usage_text, stdout); return 0;
-        case 'V': printf("drape %s\n", DRAPE_VERSION); return 0;
+        case 'V':
+            printf("drape %s\n", DRAPE_VERSION);
+            drape_cli_data_describe(stdout);
+            return 0;
         default:
             fprintf(stderr, "drape: unknown option `%s'\n%s", argv[optind - 1],
                     "Try `drape --help'.\n");

@@ -1,11 +1,13 @@
 /* check_cli.c: the command line, end to end through the drape binary:
  * help and version, exit statuses, every shipped fabric and scene accepted,
  * the shared examples accepted unchanged, every file of the bad-input
- * corpus (tests/bad) rejected with FILE:LINE:COL and a non-zero status. */
+ * corpus (tests/bad) rejected with FILE:LINE:COL and a non-zero status;
+ * the data directories (src/cli_data.h, issue 17). */
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "testutil.h"
 
@@ -22,6 +24,39 @@ START_TEST(test_help_version)
     ck_assert_int_eq(tu_run_drape("check --help", out, CAP, err, CAP), 0);
     ck_assert_int_eq(tu_run_drape("run --help", out, CAP, err, CAP), 0);
     ck_assert_ptr_nonnull(strstr(out, "--spacing"));
+}
+END_TEST
+
+/* Paths that name no file in the current directory come from DRAPE_DATA
+ * (the tests run in tests/, where there is no scenes/ or fabrics/): the
+ * default scene, a fabric given to check and --fabric; a path starting
+ * with ./ is the current directory's only; a missing one names every place
+ * looked in. */
+START_TEST(test_data_dirs)
+{
+    char data[4096]; /* the checkout: the parent of tests/ */
+    ck_assert_ptr_nonnull(getcwd(data, sizeof data));
+    char *slash = strrchr(data, '/');
+    ck_assert(slash && strcmp(slash, "/tests") == 0);
+    *slash = 0;
+    ck_assert_int_eq(setenv("DRAPE_DATA", data, 1), 0);
+    ck_assert_int_eq(tu_run_drape("--version", out, CAP, err, CAP), 0);
+    ck_assert_msg(strstr(out, data) && strstr(out, "(DRAPE_DATA)"), "%s", out);
+    ck_assert_int_eq(tu_run_drape("check fabrics/denim-wang.yaml", out, CAP, err, CAP), 0);
+    char want[4200];
+    snprintf(want, sizeof want, "%s/fabrics/denim-wang.yaml: valid fabric", data);
+    ck_assert_msg(strstr(out, want) != NULL, "%s", out);
+    ck_assert_int_eq(tu_run_drape("check ./fabrics/denim-wang.yaml", out, CAP, err, CAP), 3);
+    /* the default scene, with a fabric from the data directory */
+    ck_assert_int_eq(tu_run_drape("run -q --spacing 2cm --method static --specimens 1 "
+                                  "--fabric fabrics/denim-wang.yaml", out, CAP, err, CAP), 0);
+    ck_assert_msg(strstr(out, "\"scene\": \"cusick\"") && strstr(out, "denim-wang"), "%s", out);
+    ck_assert_int_eq(setenv("DRAPE_DATA", "/nonexistent-drape-data", 1), 0);
+    ck_assert_int_eq(tu_run_drape("run -q", out, CAP, err, CAP), 3);
+    ck_assert_msg(strstr(err, "scenes/cusick.yaml") && strstr(err, "/nonexistent-drape-data (DRAPE_DATA)"),
+                  "%s", err);
+    ck_assert_int_eq(tu_run_drape("check ../fabrics/denim-wang.yaml", out, CAP, err, CAP), 0);
+    unsetenv("DRAPE_DATA");
 }
 END_TEST
 
@@ -147,6 +182,7 @@ Suite *cli_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_help_version);
     tcase_add_test(tc, test_usage_errors);
+    tcase_add_test(tc, test_data_dirs);
     tcase_add_test(tc, test_shipped_files_valid);
     tcase_add_test(tc, test_shared_examples);
     tcase_add_test(tc, test_bad_corpus);
