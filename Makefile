@@ -70,7 +70,7 @@ LIB_OBJ  = $(LIB_SRC:%.c=$(O)/%.o)
 CLI_OBJ  = $(CLI_SRC:%.c=$(O)/%.o)
 TEST_HELPERS = tests/testutil.c tests/elastica.c tests/fixture.c
 TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
-HEADERS  = $(wildcard include/drape/*.h)
+HEADERS  = $(wildcard include/drape/*.h src/*.h)
 
 .PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
         bench-ensemble check-install \

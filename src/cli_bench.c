@@ -48,6 +48,7 @@
 #define BENCH_DEFAULT_REF_RTOL 1e-10
 #define BENCH_DEFAULT_ATOL_SCALE 1e-3 /* m: atol = rtol * 1 mm */
 #define BENCH_DEFAULT_SAMPLES 10
+#define BENCH_ANIMATE_STEPS 6         /* animate: the sample interval / 2^k, k < 6 */
 #define BENCH_DEFAULT_REPEAT 3
 #define BENCH_DEFAULT_MAX_WALL 300.0  /* s per run */
 #define BENCH_DEFAULT_SIZES "10,20,50,100,200"
@@ -82,9 +83,13 @@ static const char bench_usage[] =
     "Options:\n"
     "  --fabric FILE           fabric file instead of the scene's\n"
     "  --spacing LEN           lattice spacing, e.g. 5mm\n"
-    "  --integrators A,B,...   integrators to sweep (default: all six)\n"
+    "  --integrators A,B,...   integrators to sweep (default: all seven, animate\n"
+    "                          included)\n"
     "  --rtols LIST            comma-separated values, or HI:LO:N = N per decade\n"
     "                          from HI down to LO (default " BENCH_DEFAULT_RTOLS ")\n"
+    "  --steps LIST            the animate method's fixed steps, which it sweeps\n"
+    "                          instead of tolerances, e.g. 10ms,5ms (default: the\n"
+    "                          sample interval t_end / K divided by 1, 2, ..., 32)\n"
     "  --atol-scale LEN        atol = rtol * LEN (default 1 mm)\n"
     "  --linear-solver NAME    auto (default), klu, schur or schur-direct\n"
     "  --max-order N           highest BDF order of cvode-bdf (also inside auto),\n"
@@ -123,7 +128,8 @@ static const char bench_usage[] =
     "steps, rhs_evals, jac_evals, lin_setups, lin_factors, nonlin_iters,\n"
     "err_test_fails, conv_fails, err_pos_rel, err_pos_rms_rel, err_final_rel,\n"
     "err_final_v_rel, dc, dc_ref, err_dc, nodes, message, max_order (cvode-bdf\n"
-    "and auto).  Empty = not available.\n"
+    "and auto), step_s (animate: its rtol and atol_m are empty).  Empty = not\n"
+    "available.\n"
     "--kernels columns: side, particles, free_particles, nnz_K, rhs_ms, jac_ms\n"
     "(K and D), jac_first_order_ms, schur_factor_ms, rhs_us_per_free,\n"
     "jac_us_per_free, schur_solve_ms (one solve with that factor).\n"
@@ -139,7 +145,7 @@ static const char *const bench_columns[] = {
     "wall_s", "cpu_s", "repeats", "steps", "rhs_evals", "jac_evals", "lin_setups",
     "lin_factors", "nonlin_iters", "err_test_fails", "conv_fails", "err_pos_rel",
     "err_pos_rms_rel", "err_final_rel", "err_final_v_rel", "dc", "dc_ref", "err_dc",
-    "nodes", "message", "max_order", NULL};
+    "nodes", "message", "max_order", "step_s", NULL};
 
 static const char *const kernel_columns[] = {
     "side", "particles", "free_particles", "nnz_K", "rhs_ms", "jac_ms",
@@ -165,6 +171,7 @@ typedef struct bench_point {
     int err_kind;   /* drape_error_kind of a failure */
     char integrator[DRAPE_INTEGRATOR_NAME_MAX];
     double rtol, atol;
+    double step;    /* animate: its fixed step, s; NaN for the others */
     double wall_s, cpu_s;
     int repeats;
     drape_integrator_stats stats;
@@ -193,6 +200,9 @@ typedef struct bench {
     double *ref_x;    /* K x 3n: reference positions at t_k, k = 1..K */
     double *ref_v;    /* 3n: reference velocities at t_end */
     double ref_dc;
+    double steps[BENCH_MAX_LIST]; /* animate's steps, s (--steps) */
+    int n_steps;
+    double anim_step; /* the step of the animate point being run */
     int progress;
     /* output */
     bench_point *rows;
@@ -402,8 +412,10 @@ static void child_run(const bench *b, const char *integrator, double rtol,
     p.nodes = -1;
     p.err_pos = p.err_pos_rms = p.err_final = p.err_final_v = p.dc = NAN;
     snprintf(p.integrator, sizeof p.integrator, "%s", integrator);
-    p.rtol = rtol;
-    p.atol = rtol * b->atol_scale;
+    int animate = strcmp(integrator, "animate") == 0;
+    p.rtol = animate ? NAN : rtol;
+    p.atol = animate ? NAN : rtol * b->atol_scale;
+    p.step = animate ? b->anim_step : NAN;
     p.repeats = 1;
     drape_error err;
     drape_error_clear(&err);
@@ -419,8 +431,12 @@ static void child_run(const bench *b, const char *integrator, double rtol,
     drape_sim_opts so;
     drape_sim_opts_from_scene(&b->s, &so);
     snprintf(so.integrator, sizeof so.integrator, "%s", integrator);
-    so.rtol = rtol;
-    so.atol = p.atol;
+    if (animate) {
+        so.fixed_step = b->anim_step; /* no tolerances */
+    } else {
+        so.rtol = rtol;
+        so.atol = p.atol;
+    }
     so.t_max = b->t_end;
     so.has_equilibrium = 0;
     so.frame_every = sc.dt;
@@ -531,8 +547,10 @@ static int run_point(const bench *b, const char *integrator, double rtol, double
     if (rr != 0) {
         memset(p, 0, sizeof *p);
         snprintf(p->integrator, sizeof p->integrator, "%s", integrator);
-        p->rtol = rtol;
-        p->atol = rtol * b->atol_scale;
+        int animate = strcmp(integrator, "animate") == 0;
+        p->rtol = animate ? NAN : rtol;
+        p->atol = animate ? NAN : rtol * b->atol_scale;
+        p->step = animate ? b->anim_step : NAN;
         p->nodes = -1;
         p->err_pos = p->err_pos_rms = p->err_final = p->err_final_v = p->dc = NAN;
         p->wall_s = p->cpu_s = NAN;
@@ -623,6 +641,8 @@ static void write_row(FILE *o, const bench *b, const bench_point *p)
     fputc(',', o);
     int bdf = drape_integrator_bdf_order(p->integrator, b->s.max_order);
     if (bdf > 0) fprintf(o, "%d", bdf);
+    fputc(',', o);
+    put_num(o, p->step);
     fputc('\n', o);
 }
 
@@ -659,8 +679,12 @@ static int add_row(bench *b, const bench_point *p, drape_error *err)
 static void progress(const bench *b, const bench_point *p)
 {
     if (!b->progress) return;
-    fprintf(stderr, "drape: bench %-9s %-11s rtol %-8.3g %-7s", p->role, p->integrator,
-            p->rtol, pt_status_name(p->status));
+    if (isfinite(p->step))
+        fprintf(stderr, "drape: bench %-9s %-11s step %-8.3g %-7s", p->role, p->integrator,
+                p->step, pt_status_name(p->status));
+    else
+        fprintf(stderr, "drape: bench %-9s %-11s rtol %-8.3g %-7s", p->role, p->integrator,
+                p->rtol, pt_status_name(p->status));
     if (p->status == PT_OK)
         fprintf(stderr, " wall %.3g s, cpu %.3g s, err_pos %.3g", p->wall_s, p->cpu_s, p->err_pos);
     else if (p->msg[0])
@@ -726,26 +750,32 @@ static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, i
     double smallest = INFINITY;
     for (int ii = 0; ii < n_integ; ii++) {
         int skip = 0;
-        for (int k = 0; k < n_rtols; k++) {
+        /* animate sweeps its fixed step (--steps) instead of a tolerance */
+        int animate = strcmp(integ[ii], "animate") == 0;
+        int n_points = animate ? b->n_steps : n_rtols;
+        for (int k = 0; k < n_points; k++) {
+            double rtol_k = animate ? NAN : rtols[k];
+            if (animate) b->anim_step = b->steps[k];
             if (skip) {
                 memset(&p, 0, sizeof p);
                 snprintf(p.integrator, sizeof p.integrator, "%s", integ[ii]);
                 if (strcmp(integ[ii], "auto") == 0)
                     snprintf(p.integrator, sizeof p.integrator, "%s", b->default_name);
-                p.rtol = rtols[k];
-                p.atol = rtols[k] * b->atol_scale;
+                p.rtol = rtol_k;
+                p.atol = rtol_k * b->atol_scale;
+                p.step = animate ? b->anim_step : NAN;
                 p.status = PT_SKIPPED;
                 p.nodes = -1;
                 p.err_pos = p.err_pos_rms = p.err_final = p.err_final_v = p.dc = NAN;
                 p.wall_s = p.cpu_s = NAN;
                 snprintf(p.msg, sizeof p.msg, "a looser tolerance already timed out or ran out of memory");
             } else {
-                if (run_point(b, integ[ii], rtols[k], b->max_wall, NULL, NULL, &p, err) != 0)
+                if (run_point(b, integ[ii], rtol_k, b->max_wall, NULL, NULL, &p, err) != 0)
                     return -1;
                 for (int rep = 1; rep < b->repeat && p.status == PT_OK &&
                                   p.wall_s < BENCH_REPEAT_BELOW_S; rep++) {
                     bench_point q;
-                    if (run_point(b, integ[ii], rtols[k], b->max_wall, NULL, NULL, &q, err) != 0)
+                    if (run_point(b, integ[ii], rtol_k, b->max_wall, NULL, NULL, &q, err) != 0)
                         return -1;
                     if (q.status != PT_OK) break;
                     if (q.wall_s < p.wall_s) p.wall_s = q.wall_s;
@@ -937,7 +967,7 @@ int drape_cli_bench(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_SPACING, O_INTEG, O_RTOLS, O_ATOL_SCALE, O_LINSOL, O_TEND,
            O_SAMPLES, O_REPEAT, O_MAXWALL, O_REF, O_REFRTOL, O_REFMAXWALL, O_OUT, O_NAME,
-           O_KERNELS, O_SIZES, O_MAXORDER };
+           O_KERNELS, O_SIZES, O_MAXORDER, O_STEPS };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"spacing", required_argument, NULL, O_SPACING},
@@ -957,10 +987,12 @@ int drape_cli_bench(int argc, char **argv)
         {"kernels", no_argument, NULL, O_KERNELS},
         {"sizes", required_argument, NULL, O_SIZES},
         {"max-order", required_argument, NULL, O_MAXORDER},
+        {"steps", required_argument, NULL, O_STEPS},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
-    static char integ_buf[512], ref_buf[128], sizes_buf[512];
+    static char integ_buf[512], ref_buf[128], sizes_buf[512], steps_buf[512];
+    const char *steps_text = NULL;
     const char *fabric_path = NULL, *out_dir = NULL, *name = NULL;
     const char *integ_text = NULL, *ref_text = BENCH_DEFAULT_REF, *sizes_text = BENCH_DEFAULT_SIZES;
     const char *rtols_text = BENCH_DEFAULT_RTOLS;
@@ -980,6 +1012,7 @@ int drape_cli_bench(int argc, char **argv)
             break;
         case O_INTEG: integ_text = optarg; break;
         case O_RTOLS: rtols_text = optarg; break;
+        case O_STEPS: steps_text = optarg; break;
         case O_ATOL_SCALE:
             if (bench_quantity("--atol-scale", optarg, DRAPE_DIM_LENGTH, &atol_scale)) return 2;
             if (!(atol_scale > 0)) return bench_usage_error("--atol-scale: must be positive, got %s", optarg);
@@ -1071,6 +1104,20 @@ int drape_cli_bench(int argc, char **argv)
             return bench_usage_error("--ref: unknown integrator `%s'", ref[i]);
     if (strcmp(ref[0], ref[1]) == 0)
         return bench_usage_error("--ref: the two reference integrators must differ, got `%s' twice", ref[0]);
+    double steps[BENCH_MAX_LIST];
+    int n_steps = 0;
+    if (steps_text) { /* animate's steps: times with units, e.g. 10ms,5ms */
+        if (strlen(steps_text) >= sizeof steps_buf) return bench_usage_error("--steps: list too long%s", "");
+        snprintf(steps_buf, sizeof steps_buf, "%s", steps_text);
+        char *items[BENCH_MAX_LIST];
+        n_steps = split_list(steps_buf, items, BENCH_MAX_LIST);
+        if (n_steps < 1) return bench_usage_error("--steps: bad list `%s'", steps_text);
+        for (int i = 0; i < n_steps; i++) {
+            if (bench_quantity("--steps", items[i], DRAPE_DIM_TIME, &steps[i])) return 2;
+            if (!(steps[i] > 0) || !isfinite(steps[i]))
+                return bench_usage_error("--steps: must be positive, got %s", items[i]);
+        }
+    }
     double rtols[BENCH_MAX_LIST];
     int n_rtols = parse_rtols(rtols_text, rtols, BENCH_MAX_LIST);
     if (n_rtols < 1)
@@ -1152,6 +1199,11 @@ int drape_cli_bench(int argc, char **argv)
     }
     b.t_end = t_end > 0 ? t_end : b.s.t_max;
     b.samples = (int)samples;
+    /* animate's steps: given, or the sample interval / 2^k, k = 0..5 (each
+     * divides the interval, so the samples fall on the step grid) */
+    b.n_steps = n_steps > 0 ? n_steps : BENCH_ANIMATE_STEPS;
+    for (int i = 0; i < b.n_steps; i++)
+        b.steps[i] = n_steps > 0 ? steps[i] : b.t_end / b.samples / (double)(1 << i);
     b.atol_scale = atol_scale;
     b.linsol = linsol;
     b.repeat = (int)repeat;

@@ -80,7 +80,7 @@ static const char run_usage[] =
     "Options (override the scene file):\n"
     "  --fabric FILE            fabric file instead of the scene's\n"
     "  --integrator NAME        auto, arkode-imex, arkode-dirk, arkode-erk,\n"
-    "                           cvode-bdf, gsl-msbdf, gsl-rk8pd\n"
+    "                           cvode-bdf, gsl-msbdf, gsl-rk8pd, animate\n"
     "  --rtol X, --atol X       tolerances (atol on positions, m)\n"
     "  --spacing LEN            lattice spacing, e.g. 5mm or '0.5 cm'\n"
     "  --energy-form FORM       consistent or seed\n"
@@ -94,7 +94,16 @@ static const char run_usage[] =
     "                           motion in time; static: minimise the potential\n"
     "                           energy directly (pseudo-transient continuation,\n"
     "                           Newton, Hessian check; docs/equilibrium.md): only\n"
-    "                           the final state, no transient frames\n"
+    "                           the final state, no transient frames; animate:\n"
+    "                           frames for renderers at graphics speed, a fixed\n"
+    "                           step (the frame interval / --substeps), one\n"
+    "                           linearised implicit solve per step (Baraff &\n"
+    "                           Witkin 1998), first order, stable, no error\n"
+    "                           control (docs/animate.md)\n"
+    "  --substeps N             animate: steps per frame interval (scene:\n"
+    "                           solver.substeps; default: the fewest that keep\n"
+    "                           the step at most 1/30 s; the frame interval is\n"
+    "                           output.frames.every, or 1/30 s)\n"
     "  --linear-solver NAME     auto (default), klu, schur or schur-direct\n"
     "                           (docs/integrators.md, \"Linear solvers\")\n"
     "  --max-order N            highest BDF order of cvode-bdf (also inside auto),\n"
@@ -152,7 +161,10 @@ const char *const drape_cli_run_keys[] = {
     "integrator_switches", "max_order",
     /* issue 15: repeated specimens (cli_specimens.c) and the fall method */
     "cpu_s", "dc_sd", "dc_ci95", "dc_mode", "nodes_hist", "specimens",
-    "specimens_failed", "seed", "fall_time_s", "fall_step_s", NULL};
+    "specimens_failed", "seed", "fall_time_s", "fall_step_s",
+    /* issue 16: the animate method's step; the energy balance of dynamic runs */
+    "step_s", "substeps", "energy_total_start_J", "energy_total_end_J",
+    "energy_max_rise_J", "max_strain_peak", "energy_rescales", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -170,11 +182,36 @@ typedef struct run_ctx {
     int frame;
     int progress; /* print progress on stderr */
     double t_max;
+    /* the energy balance over the output points (dynamic runs): total
+     * E = kinetic + potential (gravity included); no work is done on the
+     * cloth (supports are fixed), so E should never rise */
+    int n_energy;
+    double e_start, e_prev, e_end, e_max_rise, strain_peak;
 } run_ctx;
+
+static void energy_balance(run_ctx *c, const drape_sim_event *ev)
+{
+    drape_energies E;
+    const drape_lattice *L = drape_model_lattice(c->model);
+    if (drape_model_energy(c->model, ev->x, &E) != 0) return;
+    double e = drape_sim_kinetic_energy(L, ev->v) + E.stretch + E.bend + E.shear + E.gravity;
+    double strain = drape_model_max_strain(c->model, ev->x);
+    if (c->n_energy == 0) {
+        c->e_start = e;
+        c->e_max_rise = -INFINITY;
+        c->strain_peak = strain;
+    } else {
+        if (e - c->e_prev > c->e_max_rise) c->e_max_rise = e - c->e_prev;
+        if (strain > c->strain_peak) c->strain_peak = strain;
+    }
+    c->e_prev = c->e_end = e;
+    c->n_energy++;
+}
 
 static int observe(void *ctx, const drape_sim_event *ev, drape_error *err)
 {
     run_ctx *c = ctx;
+    energy_balance(c, ev);
     if (c->progress) {
         fprintf(stderr, "\rdrape: t = %8.4f s of %g s, %ld steps, max speed %.3g m/s ",
                 ev->t, c->t_max, ev->steps, ev->max_speed);
@@ -306,6 +343,7 @@ static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
     res->stats.lin_setups = res->stats.nonlin_iters = res->stats.err_test_fails = -1;
     res->stats.conv_fails = res->stats.lin_iters = res->stats.lin_factors = -1;
     res->stats.switches = -1;
+    res->stats.energy_rescales = -1;
     res->max_speed = NAN;
     if (drape_equilibrium_solve(m, L->xinit, &eo, er, err) != 0) return 0;
     res->wall_s = er->wall_s;
@@ -414,6 +452,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->has_seed) s.perturb_seed = ra->seed;
     if (ra->fall_time > 0) s.fall_time = ra->fall_time;
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
+    if (ra->substeps > 0) s.substeps = ra->substeps;
     /* --resume continues a dynamic run (only those are interrupted with a
      * checkpoint); otherwise --method, the scene's solver.method, and the
      * default: the fall method where the scene asks for an equilibrium */
@@ -421,7 +460,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (method == DRAPE_METHOD_DEFAULT) method = s.method;
     if (method == DRAPE_METHOD_DEFAULT)
         method = s.has_equilibrium ? DRAPE_METHOD_FALL : DRAPE_METHOD_DYNAMIC;
-    int method_static = method != DRAPE_METHOD_DYNAMIC; /* static or fall */
+    /* animate: the dynamic run with the fixed-step integrator */
+    if (method == DRAPE_METHOD_ANIMATE) snprintf(s.integrator, sizeof s.integrator, "animate");
+    int method_static = method == DRAPE_METHOD_STATIC || method == DRAPE_METHOD_FALL;
     double fall_time = 0.0, fall_step = 0.0;
     if (method == DRAPE_METHOD_FALL) drape_scene_fall_params(&s, &fall_time, &fall_step);
 
@@ -471,7 +512,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         }
     } else {
         drape_sim_opts_from_scene(&s, &so);
-        so.observe_progress = rc.progress;
+        so.observe_progress = 1; /* the energy balance at every output point */
         if (max_steps > 0) so.max_steps = max_steps;
         so.linsol = linsol;
         so.stop = &stop_signal;
@@ -482,7 +523,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
             so.eq_below_since = ri->below_since;
             so.diag_ref = &ri->ref;
         }
-        sim_ok = drape_sim_run(m, &so, (rc.obj || rc.h5 || rc.progress) ? observe : NULL, &rc,
+        sim_ok = drape_sim_run(m, &so, observe, &rc,
                                &res, &err) == 0;
         interrupted = sim_ok && res.status == DRAPE_SIM_INTERRUPTED;
         if (ri) { /* one run: the counters and time of both parts */
@@ -615,6 +656,18 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_cli_result_int(&r, "seed", (double)s.perturb_seed);
     drape_cli_result_num(&r, "fall_time_s", method == DRAPE_METHOD_FALL ? fall_time : NAN);
     drape_cli_result_num(&r, "fall_step_s", method == DRAPE_METHOD_FALL ? fall_step : NAN);
+    {
+        int animate = !method_static && strcmp(s.integrator, "animate") == 0, nsub = 0;
+        double step = drape_scene_animate_step(&s, NULL, &nsub);
+        drape_cli_result_num(&r, "step_s", animate ? step : NAN);
+        drape_cli_result_int(&r, "substeps", animate ? nsub : NAN);
+        int bal = !method_static && rc.n_energy > 0;
+        drape_cli_result_num(&r, "energy_total_start_J", bal ? rc.e_start : NAN);
+        drape_cli_result_num(&r, "energy_total_end_J", bal ? rc.e_end : NAN);
+        drape_cli_result_num(&r, "energy_max_rise_J", bal && rc.n_energy > 1 ? rc.e_max_rise : NAN);
+        drape_cli_result_num(&r, "max_strain_peak", bal ? rc.strain_peak : NAN);
+        drape_cli_result_int(&r, "energy_rescales", animate ? res.stats.energy_rescales : NAN);
+    }
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");
@@ -737,7 +790,7 @@ int drape_cli_run(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
-           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP };
+           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -758,6 +811,7 @@ int drape_cli_run(int argc, char **argv)
         {"seed", required_argument, NULL, O_SEED},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
+        {"substeps", required_argument, NULL, O_SUBSTEPS},
         {"format", required_argument, NULL, O_FORMAT},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
@@ -809,7 +863,7 @@ int drape_cli_run(int argc, char **argv)
             for (int k = 1; drape_method_names[k]; k++)
                 if (strcmp(optarg, drape_method_names[k]) == 0) method = k;
             if (method == DRAPE_METHOD_DEFAULT)
-                return usage_error("--method: expected fall, dynamic or static, got `%s'%s", optarg, "");
+                return usage_error("--method: expected fall, dynamic, static or animate, got `%s'%s", optarg, "");
             break;
         case O_SPECIMENS:
             if (parse_count(optarg, 1, DRAPE_SCENE_SPECIMENS_MAX, &ra.specimens) != 0)
@@ -831,6 +885,11 @@ int drape_cli_run(int argc, char **argv)
             ra.seed = v;
             break;
         }
+        case O_SUBSTEPS:
+            if (parse_count(optarg, 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &ra.substeps) != 0)
+                return usage_error("--substeps: expected an integer from 1 to %s, got `%s'",
+                                   "10000", optarg);
+            break;
         case O_FALLTIME:
         case O_FALLSTEP: {
             const char *name = c == O_FALLTIME ? "--fall-time" : "--fall-step";

@@ -76,7 +76,9 @@ static const key_rule key_rules[] = {
     {"lin_factors", R_SUM}, {"mean_speed_m_s", R_MAX}, {"integrator_switches", R_SUM},
     {"cpu_s", R_OWN}, {"dc_sd", R_OWN}, {"dc_ci95", R_OWN}, {"dc_mode", R_OWN},
     {"nodes_hist", R_OWN}, {"specimens", R_OWN}, {"specimens_failed", R_OWN},
-    {"seed", R_OWN}, {NULL, 0}};
+    {"seed", R_OWN}, {"energy_total_start_J", R_MEAN}, {"energy_total_end_J", R_MEAN},
+    {"energy_max_rise_J", R_MAX}, {"max_strain_peak", R_MAX}, {"energy_rescales", R_SUM},
+    {NULL, 0}};
 
 static int rule_of(const char *key)
 {

@@ -169,7 +169,6 @@ typedef struct eq_work {
     double *rhs, *rch;     /* N: F(y) (free part); right side of the dynamics */
     double *v, *u;         /* N: inverse iteration */
     double *D, *vel, *fd;  /* damped dynamics: nnz, 3n, 3n */
-    long *eslot;           /* 4 per edge: slots of blocks (a,a),(b,b),(a,b),(b,a) or -1 */
     double kclamp[2];      /* N/m per direction; 0 = no clamping */
     cholmod_common c;
     int c_started;
@@ -371,54 +370,6 @@ static int lowest_mode(eq_work *w, int iters, double *lam, drape_error *err)
     return 0;
 }
 
-/* Slot of entry (3p, 3q) of the pattern (block row p, block column q),
- * or -1. */
-static long block_slot(const drape_pattern *P, int p, int q)
-{
-    int64_t j = 3 * (int64_t)q, row = 3 * (int64_t)p;
-    int64_t lo = P->colptr[j], hi = P->colptr[j + 1] - 1;
-    while (lo <= hi) {
-        int64_t mid = lo + (hi - lo) / 2;
-        if (P->rowind[mid] == row) return (long)mid;
-        if (P->rowind[mid] < row) lo = mid + 1;
-        else hi = mid - 1;
-    }
-    return -1;
-}
-
-/* (E8) Kc = -c (I - u u^T) on blocks aa, bb and +c (I - u u^T) on ab, ba
- * for every compressed edge (l < sigma), c = k w (sigma/l - 1): adding Kc
- * to K removes the negative geometric stiffness of compressed springs
- * from the iteration matrix (Choi & Ko 2002): H - Kc >= H. */
-static void clamp_compressed(eq_work *w, const double *x)
-{
-    memset(w->Kc, 0, sizeof(double) * (size_t)w->pat->nnz);
-    const drape_lattice *L = w->L;
-    const drape_pattern *P = w->pat;
-    double sg = L->sigma;
-    for (int e = 0; e < L->n_edges; e++) {
-        const drape_edge *ed = &L->edges[e];
-        const long *sl = w->eslot + 4 * (long)e;
-        double d[3], u[3];
-        for (int k = 0; k < 3; k++) d[k] = x[3 * ed->b + k] - x[3 * ed->a + k];
-        double l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        if (!(l < sg) || !(l > 0.0)) continue;
-        double c = w->kclamp[ed->dir] * ed->weight * (sg / l - 1.0);
-        for (int k = 0; k < 3; k++) u[k] = d[k] / l;
-        for (int blk = 0; blk < 4; blk++) {
-            if (sl[blk] < 0) continue;
-            int q = blk == 0 ? L->free_id[ed->a] : blk == 1 ? L->free_id[ed->b]
-                  : blk == 2 ? L->free_id[ed->b] : L->free_id[ed->a];
-            int64_t stride = P->colptr[3 * (int64_t)q + 1] - P->colptr[3 * (int64_t)q];
-            double sgn = blk < 2 ? -1.0 : 1.0;
-            for (int cc = 0; cc < 3; cc++)
-                for (int rr = 0; rr < 3; rr++)
-                    w->Kc[sl[blk] + cc * stride + rr] +=
-                        sgn * c * ((rr == cc ? 1.0 : 0.0) - u[rr] * u[cc]);
-        }
-    }
-}
-
 static int work_init(eq_work *w, drape_model *m, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
@@ -461,18 +412,9 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
             return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                                    "equilibrium: the model pattern lacks diagonal %ld", j);
     }
-    if (w->kclamp[0] > 0.0 || w->kclamp[1] > 0.0) {
-        w->eslot = drape_malloc(sizeof(long) * 4 * (size_t)(L->n_edges > 0 ? L->n_edges : 1));
+    if (w->kclamp[0] > 0.0 || w->kclamp[1] > 0.0) { /* (E8): model.h */
         w->Kc = drape_malloc(sizeof(double) * nnz);
-        if (!w->eslot || !w->Kc) goto nomem;
-        for (int e = 0; e < L->n_edges; e++) {
-            int pa = L->free_id[L->edges[e].a], pb = L->free_id[L->edges[e].b];
-            long *sl = w->eslot + 4 * (long)e;
-            sl[0] = pa >= 0 ? block_slot(w->pat, pa, pa) : -1;
-            sl[1] = pb >= 0 ? block_slot(w->pat, pb, pb) : -1;
-            sl[2] = pa >= 0 && pb >= 0 ? block_slot(w->pat, pa, pb) : -1; /* row a, col b */
-            sl[3] = pa >= 0 && pb >= 0 ? block_slot(w->pat, pb, pa) : -1;
-        }
+        if (!w->Kc) goto nomem;
     }
     if (w->N == 0) return 0;
 
@@ -529,7 +471,6 @@ static void work_free(eq_work *w)
     drape_free(w->f);
     drape_free(w->ft);
     drape_free(w->fz);
-    drape_free(w->eslot);
     drape_free(w->Kc);
     drape_free(w->dy);
     drape_free(w->D);
@@ -590,7 +531,7 @@ static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps
             have_prev = 0;
             continue;
         }
-        if (w->eslot) clamp_compressed(w, x0);
+        if (w->Kc) drape_model_compression_clamp(w->m, x0, w->kclamp, w->Kc);
         double *ax = w->A->x;
         for (int64_t k = 0; k < P->nnz; k++)
             ax[k] = -bh * w->D[k] - bh * bh * (w->K[k] + (w->Kc ? w->Kc[k] : 0.0));
@@ -799,7 +740,7 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
                 goto out;
             }
             have_jac = 1;
-            if (w.eslot) clamp_compressed(&w, x);
+            if (w.Kc) drape_model_compression_clamp(w.m, x, w.kclamp, w.Kc);
             gather(&w, w.f, rhs);
         }
         r->iterations++;

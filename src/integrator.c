@@ -24,7 +24,7 @@ static const drape_integrator_type *const registry[] = {
     &drape_integrator_cvode_bdf,  &drape_integrator_arkode_imex,
     &drape_integrator_arkode_dirk, &drape_integrator_arkode_erk,
     &drape_integrator_gsl_msbdf,  &drape_integrator_gsl_rk8pd,
-    NULL};
+    &drape_integrator_animate, NULL};
 
 /* "auto": cvode-bdf and arkode-erk with switching (integrator_auto.c). */
 #define AUTO_BACKEND (&drape_integrator_auto)
@@ -234,7 +234,7 @@ static int check_opts(const drape_integrator_opts *o, drape_error *err)
         return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "solver.max_order",
                                "must be 1..5 (0 = default %d), got %d",
                                DRAPE_INTEGRATOR_MAX_ORDER_DEFAULT, o->max_order);
-    if (o->max_steps < 0 || o->t_scale < 0.0 || o->t_stop < 0.0 || o->h_init < 0.0 ||
+    if (o->max_steps < 0 || o->t_scale < 0.0 || o->t_stop < 0.0 || o->h_init < 0.0 || !(o->fixed_step >= 0.0) ||
         o->dense_limit_bytes < 0.0 || !(o->auto_hw >= 0.0))
         return drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "solver",
                                "negative integrator option");

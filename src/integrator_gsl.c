@@ -236,6 +236,7 @@ static void gsl_stats(const void *st, drape_integrator_stats *r)
     const gsl_state *s = st;
     memset(r, 0, sizeof *r);
     r->switches = -1;
+    r->energy_rescales = -1;
     r->steps = (long)s->d->e->count;
     r->err_test_fails = (long)s->d->e->failed_steps;
     r->rhs_evals = s->ode->n_rhs;

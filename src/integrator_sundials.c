@@ -1135,6 +1135,7 @@ static void sun_stats(const void *st, drape_integrator_stats *r)
     long v;
     memset(r, 0, sizeof *r);
     r->switches = -1;
+    r->energy_rescales = -1;
     r->rhs_evals = s->ode->n_rhs;
     r->jac_evals = s->ode->n_jac;
     r->linsol = s->linsol;

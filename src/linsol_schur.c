@@ -102,6 +102,7 @@ struct drape_schur {
     int64_t *map_b;     /* nl: slot of (j, i) in P */
     cholmod_common c;
     int have_c;
+    int no_ldl;         /* 1: no LDL^T fallback (drape_schur_ldl_fallback) */
     cholmod_sparse *A;  /* S, lower triangle (stype -1) */
     cholmod_factor *Lll;  /* supernodal LL^T */
     cholmod_factor *Lldl; /* simplicial LDL^T (lazy) */
@@ -358,6 +359,10 @@ static int factor_numeric(drape_schur *s, double gamma)
         return 1;
     }
 
+    if (s->no_ldl) { /* the caller shifts S instead (drape_schur_ldl_fallback) */
+        s->st.failures++;
+        return 1;
+    }
     /* 2. simplicial LDL^T, same ordering (analysed on first use) */
     if (!s->Lldl) {
         int nm = s->c.nmethods, ord = s->c.method[0].ordering, pa = s->c.postorder;
@@ -388,6 +393,8 @@ static int factor_numeric(drape_schur *s, double gamma)
 nomem:
     return -1;
 }
+
+void drape_schur_ldl_fallback(drape_schur *s, int on) { s->no_ldl = !on; }
 
 /* ---- solve and product -------------------------------------------------------- */
 

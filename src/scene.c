@@ -30,7 +30,7 @@
 
 const char *const drape_integrator_names[] = {
     "auto", "arkode-imex", "arkode-dirk", "arkode-erk",
-    "cvode-bdf", "gsl-msbdf", "gsl-rk8pd", NULL};
+    "cvode-bdf", "gsl-msbdf", "gsl-rk8pd", "animate", NULL};
 
 /* Defaults (docs/scenes.md). */
 #define SCENE_CUSICK_DIAMETER 0.30  /* m, Cusick specimen (BS 5058) */
@@ -51,7 +51,7 @@ static const char *const shape_names[] = {"rectangle", "circle", "strip",
 static const char *const form_names[] = {"consistent", "seed", NULL};
 
 /* drape_method order */
-const char *const drape_method_names[] = {"default", "dynamic", "static", "fall", NULL};
+const char *const drape_method_names[] = {"default", "dynamic", "static", "fall", "animate", NULL};
 static const char *const term_names[] = {"stretch", "bend", "shear",
                                          "gravity", NULL};
 static const char *const table_shape_names[] = {"square", "round", NULL};
@@ -718,7 +718,7 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
 {
     static const char *const keys[] = {"integrator", "rtol", "atol",
                                        "max_order", "method", "fall_time",
-                                       "fall_step", NULL};
+                                       "fall_step", "substeps", NULL};
     const drape_ynode *m = drape_ynode_get(root, "solver", NULL), *v;
     snprintf(s->integrator, sizeof s->integrator, "%s", "auto");
     s->rtol = SCENE_RTOL;
@@ -758,6 +758,13 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
         parse_quantity(c, v, "solver.fall_step", DRAPE_DIM_TIME, "time",
                        Q_POSITIVE, &s->fall_step))
         return -1;
+    if ((v = drape_ynode_get(m, "substeps", NULL)) != NULL) {
+        long k;
+        if (parse_long(c, v, "solver.substeps", "an integer from 1 to "
+                       "10000", 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &k))
+            return -1;
+        s->substeps = (int)k;
+    }
     return 0;
 }
 

@@ -202,6 +202,19 @@ void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_
     *step_s = s->fall_step > 0.0 ? s->fall_step : DRAPE_FALL_STEP_FACTOR * tau;
 }
 
+double drape_scene_animate_step(const drape_scene *s, double *frame_s, int *substeps)
+{
+    double frame = s->has_frames && s->frame_every > 0.0 ? s->frame_every : DRAPE_ANIMATE_FRAME;
+    int n = s->substeps;
+    if (n <= 0) {
+        double q = ceil(frame / DRAPE_ANIMATE_FRAME - 1e-9);
+        n = q < 1.0 ? 1 : q > DRAPE_ANIMATE_SUBSTEPS_MAX ? DRAPE_ANIMATE_SUBSTEPS_MAX : (int)q;
+    }
+    if (frame_s) *frame_s = frame;
+    if (substeps) *substeps = n;
+    return frame / n;
+}
+
 int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
                                   drape_error *err)
 {

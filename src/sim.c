@@ -69,6 +69,7 @@ void drape_sim_opts_from_scene(const drape_scene *s, drape_sim_opts *o)
     o->frame_every = s->has_frames ? s->frame_every : 0.0;
     o->max_order = s->max_order;
     o->strain_limit = s->strain_limit;
+    o->fixed_step = drape_scene_animate_step(s, NULL, NULL); /* animate only */
 }
 
 void drape_sim_result_free(drape_sim_result *r)
@@ -223,6 +224,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     r->eq_below_since = -1.0;
     r->check_speed = NAN;
     r->stats.switches = -1; /* no integrator yet: not available */
+    r->stats.energy_rescales = -1;
     r->diagnosis.kind = DRAPE_DIAG_NONE;
     r->diagnosis.term = "";
     if (check_opts(o, err)) return -1;
@@ -248,6 +250,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     io.max_order = o->max_order;
     io.max_steps = o->max_steps;
     io.linsol = o->linsol;
+    io.fixed_step = o->fixed_step;
     io.stop = o->stop;
     w0 = now_s();
     I = drape_integrator_new(m, o->integrator, &io, err);

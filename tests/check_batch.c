@@ -24,7 +24,7 @@ static char out[CAP], err[CAP];
 #define TINY "--spacing 5cm --t-max 0.05s"
 #define COTTON "../fabrics/cotton-breen.yaml"
 #define DENIM "../fabrics/denim-wang.yaml"
-#define MAXF 64
+#define MAXF 96
 #define MAXR 16
 
 typedef struct table {

@@ -28,7 +28,7 @@ static const char *const columns[] = {
     "wall_s", "cpu_s", "repeats", "steps", "rhs_evals", "jac_evals", "lin_setups",
     "lin_factors", "nonlin_iters", "err_test_fails", "conv_fails", "err_pos_rel",
     "err_pos_rms_rel", "err_final_rel", "err_final_v_rel", "dc", "dc_ref", "err_dc",
-    "nodes", "message", "max_order", NULL};
+    "nodes", "message", "max_order", "step_s", NULL};
 
 typedef struct table {
     int nrow, ncol;

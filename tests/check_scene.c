@@ -238,8 +238,9 @@ START_TEST(test_names)
     ck_assert_str_eq(drape_energy_form_name(DRAPE_FORM_SEED), "seed");
     int n = 0;
     while (drape_integrator_names[n]) n++;
-    ck_assert_int_eq(n, 7);
+    ck_assert_int_eq(n, 8);
     ck_assert_str_eq(drape_integrator_names[0], "auto");
+    ck_assert_str_eq(drape_integrator_names[7], "animate");
 }
 END_TEST
 

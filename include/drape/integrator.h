@@ -29,7 +29,11 @@
  *   gsl-rk8pd    GSL Runge-Kutta Prince-Dormand 8(9), explicit;
  *   auto         cvode-bdf, switching to arkode-erk and back while it runs,
  *                on a work estimate from its step sizes
- *                (src/integrator_auto.c, docs/integrators.md).
+ *                (src/integrator_auto.c, docs/integrators.md);
+ *   animate      fixed step opts.fixed_step, one linearised backward Euler
+ *                solve per step with the exact Jacobian (Baraff & Witkin
+ *                1998), CHOLMOD on M - h D - h^2 K; rtol and atol unused
+ *                (src/integrator_animate.c, docs/animate.md; issue 16).
  *
  * Errors.  Every solver failure sets a drape_error of kind DRAPE_E_NUMERIC
  * whose message names the integrator, the time, the solver's reason (the
@@ -71,6 +75,8 @@ typedef struct drape_integrator_opts {
                            arkode-erk; 0 = from the step Dormand-Prince took
                            (integrator_auto.c;
                            tests raise it to force switches) */
+    double fixed_step;  /* animate: its fixed step, s (> 0 required there;
+                           ignored by the others) (added, issue 16) */
 } drape_integrator_opts;
 
 /* Linear solver of the Newton systems (I - gamma J) dy = r of cvode-bdf,
@@ -126,6 +132,9 @@ typedef struct drape_integrator_stats {
                        GSL's dense LU) */
     long switches;  /* auto: changes between cvode-bdf and arkode-erk; -1 for
                        the other backends */
+    long energy_rescales; /* animate: steps whose velocities were scaled down
+                       so that the total energy did not rise; -1 for the
+                       others (added, issue 16) */
 } drape_integrator_stats;
 
 /* ---- Backend interface --------------------------------------------------
@@ -186,6 +195,7 @@ extern const drape_integrator_type drape_integrator_arkode_erk;
 extern const drape_integrator_type drape_integrator_gsl_msbdf;
 extern const drape_integrator_type drape_integrator_gsl_rk8pd;
 extern const drape_integrator_type drape_integrator_auto;
+extern const drape_integrator_type drape_integrator_animate;
 
 /* Registry: the backend called `name` (including "auto"), or NULL. */
 const drape_integrator_type *drape_integrator_type_find(const char *name);

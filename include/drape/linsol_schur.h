@@ -50,6 +50,11 @@ void drape_schur_free(drape_schur *s);
 int drape_schur_factor(drape_schur *s, const double *K, const double *D,
                        double gamma, drape_error *err);
 
+/* on = 0: drape_schur_factor returns 1 where LL^T finds S indefinite,
+ * without trying the (slow, simplicial) LDL^T: for a caller that shifts
+ * S to positive definite instead (integrator_animate.c).  Default 1. */
+void drape_schur_ldl_fallback(drape_schur *s, int on);
+
 /* z = P^-1 r for P = I - gamma J: the block elimination above with K
  * (values in P) and the current gamma, S from the last factorisation
  * (exact when gamma equals its gamma and K, D are symmetric).  r, z have

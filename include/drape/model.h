@@ -118,6 +118,20 @@ int drape_model_jacobian_first_order(drape_model *m, unsigned parts,
 int drape_model_omega_bound(drape_model *m, unsigned parts, const double *x,
                             double *omega);
 
+/* The correction that removes the negative geometric stiffness of
+ * compressed stretch springs from K (Choi & Ko 2002; numerics 3.2): for
+ * every edge shorter than sigma, c = kclamp[dir] w (sigma / l - 1) > 0 and
+ * P = I - u u^T (u the edge's direction),
+ *     Kc = -c P on blocks aa, bb,  +c P on ab, ba,
+ * so that K + Kc >= K drops the spring's transverse stiffness
+ * k w (1 - sigma/l) P < 0 when kclamp is the fabric's k (kclamp NULL:
+ * the fabric's k, indexed by drape_dir).  Kc (nnz of
+ * drape_model_pattern) is overwritten.  The equilibrium solver's
+ * iteration matrix and the animate integrator use it to keep
+ * M - h D - h^2 (K + Kc) positive definite at large steps. */
+void drape_model_compression_clamp(const drape_model *m, const double *x,
+                                   const double kclamp[2], double *Kc);
+
 /* Largest |l - sigma| / sigma over stretch edges at x. */
 double drape_model_max_strain(const drape_model *m, const double *x);
 

@@ -48,11 +48,14 @@ typedef enum drape_method {
                              equilibrium, dynamic for the others */
     DRAPE_METHOD_DYNAMIC, /* the equations of motion in time (integrator) */
     DRAPE_METHOD_STATIC,  /* minimise E_pot from the flat state (equilibrium.h) */
-    DRAPE_METHOD_FALL     /* a short damped large-step fall, then the static
+    DRAPE_METHOD_FALL,    /* a short damped large-step fall, then the static
                              solver (equilibrium.h, dyn_time; docs/ensemble.md) */
+    DRAPE_METHOD_ANIMATE  /* the equations of motion at a fixed step tied to
+                             the frame rate (integrator "animate";
+                             docs/animate.md, issue 16) */
 } drape_method;
 
-/* "default", "dynamic", "static", "fall", NULL */
+/* "default", "dynamic", "static", "fall", "animate", NULL */
 extern const char *const drape_method_names[];
 
 /* Repeated specimens (MODEL.md 6): at most this many per run. */
@@ -106,6 +109,9 @@ typedef struct drape_scene {
     drape_method method;           /* solver.method; DEFAULT when not given */
     double fall_time, fall_step;   /* solver.fall_time, fall_step, s; 0 = the
                                       fall method's defaults */
+    int substeps;                  /* solver.substeps: animate steps per frame
+                                      interval; 0 = DRAPE_ANIMATE_SUBSTEPS (added,
+                                      issue 16) */
     int specimens;                 /* specimens: repeated specimens with seeds
                                       seed, seed + 1, ... (default 1) */
 
@@ -177,6 +183,16 @@ int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
  * this multiple of the static tolerance counts as the rest state. */
 #define DRAPE_FALL_FLOOR 100.0
 void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s);
+
+/* The animate method's fixed step (docs/animate.md): the frame interval
+ * (output.frames.every, or DRAPE_ANIMATE_FRAME when the scene writes no
+ * frames: 30 frames per second) divided by solver.substeps; by default the
+ * fewest steps per frame that keep the step at most DRAPE_ANIMATE_FRAME
+ * (1 at 30 frames per second, 3 for frames every 0.1 s).  *frame_s and
+ * *substeps may be NULL. */
+#define DRAPE_ANIMATE_FRAME (1.0 / 30.0)
+#define DRAPE_ANIMATE_SUBSTEPS_MAX 10000
+double drape_scene_animate_step(const drape_scene *s, double *frame_s, int *substeps);
 
 /* Names for output. */
 const char *drape_scene_kind_name(drape_scene_kind k);

@@ -81,6 +81,7 @@ typedef struct drape_sim_opts {
     const double *x0, *v0; /* resume: start state, 3n each (NULL: lattice xinit, rest) */
     double eq_below_since; /* resume: start of the slow span at t0, s; -1 = none */
     const drape_diag_ref *diag_ref; /* resume: energy reference; NULL = the start state */
+    double fixed_step;   /* integrator "animate": its step, s (added, issue 16) */
 } drape_sim_opts;
 
 /* Defaults: "auto", rtol 1e-4, atol 1e-7 m, t_max 20 s, no equilibrium

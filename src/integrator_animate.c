@@ -1,0 +1,518 @@
+/* integrator_animate.c: "animate", a fixed-step backward Euler for frames
+ * at graphics speed (issue 16, docs/animate.md).
+ *
+ * Backward Euler from (x_n, v_n) over a step h, x = x_n + h v,
+ *     M (v - v_n) = h f_c(x_n + h v) + h D_n v,
+ * (f_c = -grad E the conservative forces, gravity included; the dampers
+ * linear in v with D_n = df/dv at x_n, exact for air drag, the dashpot
+ * directions frozen at x_n for the edge dampers) is the stationary point
+ * of the incremental potential (Martin et al. 2011; Gast et al. 2015)
+ *     Phi(v) = 1/2 (v - v_n)^T M (v - v_n) + E(x_n + h v) - h/2 v^T D_n v.
+ * Each step minimises Phi by at most DRAPE_ANIMATE_NEWTON_MAX Newton
+ * iterations from v = v_n, all with one matrix
+ *     S = M - h D_n - h^2 (K + Kc),
+ * K = df_c/dx at x_n + h v_n and Kc the clamp of compressed springs
+ * (model.h: S stays positive definite), factored once per step by CHOLMOD
+ * (linsol_schur.h), and a backtracking (Armijo) line search on Phi.  The
+ * first iteration with a full step is the linearised backward Euler of
+ * Baraff & Witkin (1998); the line search is what makes a step safe when
+ * the linearisation overshoots (a stretch edge at the pins at a 33 ms
+ * step): Phi never increases, and nothing can fail to converge, since
+ * the step is taken after the iterations whatever their residual.  The
+ * error is first order in h (docs/animate.md).
+ *
+ * The step h is fixed (opts.fixed_step).  Only a step whose evaluation
+ * reports a folded hinge or a non-finite value, or whose S cannot be
+ * factored, is redone as two half steps (at most DRAPE_ANIMATE_MAX_HALVINGS
+ * times; conv_fails counts them), and a last step is shortened to land on
+ * t_stop.  Steps run on the grid t0 + k h (the frames, h divides their
+ * interval); an output point off the grid (an equilibrium check) splits
+ * its grid step in two, so that every state reported is a state of the
+ * one trajectory (no interpolation: the energy balance holds at every
+ * output point) and the grid is kept.  Nothing is allocated after alloc except CHOLMOD's first
+ * factorisation (linsol_schur.h).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "drape/alloc.h"
+#include "drape/integrator.h"
+#include "drape/linsol_schur.h"
+
+/* A step that fails is halved at most this often (h / 2^10). */
+#define DRAPE_ANIMATE_MAX_HALVINGS 10
+/* Newton iterations per step, one factorisation, at most; fewer once a
+ * correction moves no particle by more than XTOL spacings
+ * (docs/animate.md). */
+#ifndef DRAPE_ANIMATE_NEWTON_MAX
+#define DRAPE_ANIMATE_NEWTON_MAX 4
+#endif
+#ifndef DRAPE_ANIMATE_XTOL
+#define DRAPE_ANIMATE_XTOL 1e-3
+#endif
+/* Armijo constant and the smallest step fraction of the line search. */
+#define ANIM_ARMIJO 1e-4
+#define ANIM_ALPHA_MIN (1.0 / 1024.0)
+/* Halvings of a step's velocity before it is set to zero (energy cut-back). */
+#define ANIM_CUTBACK_MAX 30
+/* The shift mu M of an indefinite S: from ANIM_SHIFT_MIN by factors of 10. */
+#define ANIM_SHIFT_MIN 1e-2
+#define ANIM_SHIFT_MAX 1e4
+
+#define PARTS_CONS (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY)
+#define PARTS_DAMP (DRAPE_PART_AIR | DRAPE_PART_EDGE)
+
+typedef struct anim {
+    drape_ode *ode;
+    long nf3, dim;
+    double h;             /* the fixed step, s */
+    double t_stop;        /* never step past it; 0 = none */
+    long max_steps;       /* per step_to call */
+    double t0;            /* start: the step grid is t0 + k h */
+    double t, t_prev;     /* current time and the start of the last step */
+    double *y, *y_prev;   /* dim */
+    double *r, *z;        /* dim: right-hand sides and solutions */
+    double *vn, *vt, *g, *dv; /* nf3: v_n, trial v, gradient of Phi, direction */
+    double *K, *D, *Kc;   /* nnz of the model pattern */
+    double *Kd;           /* nnz: the dampers' dK (not used: D_n frozen) */
+    int have_d;
+    drape_schur *schur;
+    long steps, halvings, factors, failed_factors, newton, backtracks;
+    long rescales;        /* steps whose velocities were scaled down */
+    long shifts;          /* factorisations that needed the shift mu M */
+    long *dpos;           /* nf3: the diagonal's slots in the pattern */
+    double e_tot;         /* total energy (kinetic + potential) at y, J */
+    int e_valid;          /* e_tot is that of the current y */
+    double e_tol;         /* rises below this are roundoff, J */
+    drape_error serr;     /* scratch for the Schur solver's errors */
+} anim;
+
+static void anim_free(void *st)
+{
+    anim *s = st;
+    if (!s) return;
+    drape_schur_free(s->schur);
+    drape_free(s->y);
+    drape_free(s->y_prev);
+    drape_free(s->r);
+    drape_free(s->K);
+    drape_free(s->D);
+    drape_free(s->Kc);
+    drape_free(s->Kd);
+    drape_free(s->dpos);
+    drape_free(s->z);
+    drape_free(s->vn);
+    drape_free(s->vt);
+    drape_free(s->g);
+    drape_free(s->dv);
+    drape_free(s);
+}
+
+static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t0,
+                        const double *y0, drape_error *err)
+{
+    if (!(o->fixed_step > 0.0) || !isfinite(o->fixed_step)) {
+        drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, "solver.step",
+                        "animate: needs a positive fixed step, got %g s", o->fixed_step);
+        return NULL;
+    }
+    anim *s = drape_calloc(1, sizeof *s);
+    if (!s) goto nomem;
+    const drape_pattern *P = drape_model_pattern(ode->model);
+    s->ode = ode;
+    s->nf3 = ode->nf3;
+    s->dim = ode->dim;
+    s->h = o->fixed_step;
+    s->t_stop = o->t_stop;
+    s->max_steps = o->max_steps > 0 ? o->max_steps : DRAPE_INTEGRATOR_MAX_STEPS_DEFAULT;
+    s->t = s->t_prev = s->t0 = t0;
+    size_t dim = (size_t)s->dim, nnz = (size_t)(P->nnz ? P->nnz : 1);
+    s->y = drape_malloc(sizeof(double) * dim);
+    s->y_prev = drape_malloc(sizeof(double) * dim);
+    s->r = drape_malloc(sizeof(double) * dim);
+    s->K = drape_malloc(sizeof(double) * nnz);
+    s->D = drape_malloc(sizeof(double) * nnz);
+    s->Kc = drape_malloc(sizeof(double) * nnz);
+    s->Kd = drape_malloc(sizeof(double) * nnz);
+    s->z = drape_malloc(sizeof(double) * dim);
+    size_t n3 = (size_t)(s->nf3 ? s->nf3 : 1);
+    s->vn = drape_malloc(sizeof(double) * n3);
+    s->vt = drape_malloc(sizeof(double) * n3);
+    s->g = drape_malloc(sizeof(double) * n3);
+    s->dv = drape_malloc(sizeof(double) * n3);
+    s->dpos = drape_malloc(sizeof(long) * n3);
+    if (!s->y || !s->y_prev || !s->r || !s->K || !s->D || !s->Kc || !s->Kd || !s->z ||
+        !s->vn || !s->vt || !s->g || !s->dv || !s->dpos)
+        goto nomem;
+    for (long j = 0; j < s->nf3; j++) {
+        s->dpos[j] = -1;
+        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++)
+            if (P->rowind[k] == j) s->dpos[j] = (long)k;
+        if (s->dpos[j] < 0) {
+            anim_free(s);
+            drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                            "animate: the model pattern lacks diagonal %ld", j);
+            return NULL;
+        }
+    }
+    s->have_d = (ode->parts & (DRAPE_PART_AIR | DRAPE_PART_EDGE)) != 0;
+    s->schur = drape_schur_new(P, ode->inv_mass, err);
+    if (!s->schur) {
+        anim_free(s);
+        return NULL;
+    }
+    drape_schur_ldl_fallback(s->schur, 0);
+    memcpy(s->y, y0, sizeof(double) * dim);
+    memcpy(s->y_prev, y0, sizeof(double) * dim);
+    /* roundoff of the energy: relative 1e-12 of m g over the extent */
+    const drape_lattice *L = ode->lattice;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < L->n; i++)
+        for (int c = 0; c < 3; c++) {
+            lo[c] = fmin(lo[c], L->xinit[3 * i + c]);
+            hi[c] = fmax(hi[c], L->xinit[3 * i + c]);
+        }
+    double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    s->e_tol = 1e-12 * L->mass_total * 9.80665 * (ext > 0.0 ? ext : L->sigma);
+    return s;
+nomem:
+    anim_free(s);
+    drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "animate: out of memory");
+    return NULL;
+}
+
+static int anim_reinit(void *st, double t0, const double *y0, drape_error *err)
+{
+    (void)err;
+    anim *s = st;
+    memcpy(s->y, y0, sizeof(double) * (size_t)s->dim);
+    memcpy(s->y_prev, y0, sizeof(double) * (size_t)s->dim);
+    s->t = s->t_prev = s->t0 = t0;
+    s->steps = s->halvings = s->factors = s->failed_factors = s->newton = s->backtracks = 0;
+    s->rescales = s->shifts = 0;
+    s->e_valid = 0;
+    return 0;
+}
+
+/* Full positions x_n + h v into o->x (free entries; the fixed ones hold
+ * xinit from drape_ode's set-up) and v into o->v. */
+static void scatter_xv(anim *s, const double *xn, const double *v, double h)
+{
+    drape_ode *o = s->ode;
+    const drape_lattice *L = o->lattice;
+    for (int k = 0; k < L->n_free; k++) {
+        long id = 3 * (long)L->free_to_id[k];
+        for (int c = 0; c < 3; c++) {
+            o->x[id + c] = xn[3 * k + c] + h * v[3 * k + c];
+            o->v[id + c] = v[3 * k + c];
+        }
+    }
+}
+
+/* Phi(v) (at x_n + h v, scattered here); 1 if the energy cannot be
+ * evaluated (folded hinge) or is not finite. */
+static int phi(anim *s, const double *xn, const double *v, double h, double *out)
+{
+    drape_ode *o = s->ode;
+    scatter_xv(s, xn, v, h);
+    drape_energies E;
+    if (drape_model_energy(o->model, o->x, &E) != 0) return 1;
+    double kin = 0.0, damp = 0.0;
+    const double *im = o->inv_mass;
+    for (long i = 0; i < s->nf3; i++) {
+        double d = v[i] - s->vn[i];
+        kin += d * d / im[i / 3];
+    }
+    /* v^T D_n v through the Schur solver's product: z = [v2; M^-1 D v] */
+    memset(s->r, 0, sizeof(double) * (size_t)s->nf3);
+    memcpy(s->r + s->nf3, v, sizeof(double) * (size_t)s->nf3);
+    if (s->have_d) {
+        drape_schur_jtimes(s->schur, s->K, s->D, s->r, s->z);
+        for (long i = 0; i < s->nf3; i++) damp += v[i] * s->z[s->nf3 + i] / im[i / 3];
+    }
+    double p = 0.5 * kin + E.stretch + E.bend + E.shear + E.gravity - 0.5 * h * damp;
+    if (!isfinite(p)) return 1;
+    *out = p;
+    return 0;
+}
+
+/* Total energy of positions x (free part of y) and velocities v. */
+static int total_energy(anim *s, const double *x, const double *v, double *epot, double *ekin)
+{
+    drape_ode *o = s->ode;
+    scatter_xv(s, x, v, 0.0);
+    drape_energies E;
+    if (drape_model_energy(o->model, o->x, &E) != 0) return 1;
+    double k = 0.0;
+    for (long i = 0; i < s->nf3; i++) k += v[i] * v[i] / o->inv_mass[i / 3];
+    *epot = E.stretch + E.bend + E.shear + E.gravity;
+    *ekin = 0.5 * k;
+    return isfinite(*epot) && isfinite(*ekin) ? 0 : 1;
+}
+
+/* g = grad Phi(v) = M (v - v_n) - h f_c(x_n + h v) - h D_n v.  0, 1
+ * (recoverable), -1 (interrupted). */
+static int phi_grad(anim *s, const double *xn, const double *v, double h)
+{
+    drape_ode *o = s->ode;
+    const double *im = o->inv_mass;
+    /* y = [x_n + h v; v] for drape_ode_rhs: M^-1 f_c in z[nf3..] */
+    for (long i = 0; i < s->nf3; i++) {
+        s->r[i] = xn[i] + h * v[i];
+        s->r[s->nf3 + i] = v[i];
+    }
+    int rc = drape_ode_rhs(o, o->parts & PARTS_CONS, 0, s->r, s->z);
+    if (rc != 0) return rc;
+    for (long i = 0; i < s->nf3; i++) s->g[i] = (v[i] - s->vn[i]) / im[i / 3] - h * s->z[s->nf3 + i] / im[i / 3];
+    if (s->have_d) {
+        memset(s->r, 0, sizeof(double) * (size_t)s->nf3);
+        memcpy(s->r + s->nf3, v, sizeof(double) * (size_t)s->nf3);
+        drape_schur_jtimes(s->schur, s->K, s->D, s->r, s->z);
+        for (long i = 0; i < s->nf3; i++) s->g[i] -= h * s->z[s->nf3 + i] / im[i / 3];
+    }
+    for (long i = 0; i < s->nf3; i++)
+        if (!isfinite(s->g[i])) return 1;
+    return 0;
+}
+
+/* One backward Euler step of size h from y into y.  Returns 0, 1
+ * (recoverable: fold, non-finite value, S not factorable), -1 (interrupted
+ * or out of memory; err set). */
+static int be_step(anim *s, double h, double *y, drape_error *err)
+{
+    drape_ode *o = s->ode;
+    long n = s->nf3, nnz = drape_model_pattern(o->model)->nnz;
+    const double *xn = y; /* y[0..n) = x_n stays until the end */
+    double *v = s->vt;
+    memcpy(s->vn, y + n, sizeof(double) * (size_t)n);
+    if (!s->e_valid) {
+        double ep, ek;
+        if (total_energy(s, y, y + n, &ep, &ek) != 0) return 1;
+        s->e_tot = ep + ek;
+        s->e_valid = 1;
+    }
+    memcpy(v, s->vn, sizeof(double) * (size_t)n); /* Newton from v = v_n */
+    /* D_n at (x_n, v_n); K + Kc at the predictor x_n + h v_n */
+    if (s->have_d) {
+        scatter_xv(s, xn, s->vn, 0.0);
+        o->n_jac++;
+        if (drape_model_jacobian(o->model, o->parts & PARTS_DAMP, o->x, o->v, s->Kd, s->D) != 0)
+            return 1;
+    }
+    scatter_xv(s, xn, v, h);
+    o->n_jac++;
+    if (drape_model_jacobian(o->model, o->parts & PARTS_CONS, o->x, o->v, s->K, NULL) != 0) return 1;
+    drape_model_compression_clamp(o->model, o->x, NULL, s->Kc);
+    for (long k = 0; k < nnz; k++) s->K[k] += s->Kc[k];
+    /* S = M - h D - h^2 (K + Kc); where bending or shear make it
+     * indefinite, S + mu M with mu = 1e-2, 1e-1, ... (a Levenberg-Marquardt
+     * shift: the direction stays one of descent for Phi, and the factor a
+     * supernodal LL^T) */
+    int rc;
+    double mu = 0.0;
+    for (;;) {
+        drape_error_clear(&s->serr);
+        rc = drape_schur_factor(s->schur, s->K, s->have_d ? s->D : NULL, h, &s->serr);
+        if (rc < 0) {
+            *err = s->serr;
+            return -1;
+        }
+        if (rc == 0) break;
+        s->failed_factors++;
+        double mu_next = mu > 0.0 ? 10.0 * mu : ANIM_SHIFT_MIN;
+        if (mu_next > ANIM_SHIFT_MAX) return 1;
+        /* K <- K - (mu_next - mu) / h^2 M on the diagonal */
+        for (long j = 0; j < n; j++)
+            s->K[s->dpos[j]] -= (mu_next - mu) / (h * h) / o->inv_mass[j / 3];
+        mu = mu_next;
+    }
+    if (mu > 0.0) s->shifts++;
+    s->factors++;
+    double p0;
+    if (phi(s, xn, v, h, &p0) != 0) return 1;
+    for (int it = 0; it < DRAPE_ANIMATE_NEWTON_MAX; it++) {
+        rc = phi_grad(s, xn, v, h);
+        if (rc < 0)
+            return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                                   "animate: interrupted at t = %.6g s", s->t);
+        if (rc > 0) return 1;
+        s->newton++;
+        /* S dv = -g: the first-order solve with r = [0; -M^-1 g] */
+        memset(s->r, 0, sizeof(double) * (size_t)n);
+        for (long i = 0; i < n; i++) s->r[n + i] = -s->g[i] * o->inv_mass[i / 3];
+        if (drape_schur_solve(s->schur, s->K, h, s->r, s->z) != 0) return 1;
+        double slope = 0.0, dmax = 0.0;
+        for (long i = 0; i < n; i++) {
+            s->dv[i] = s->z[n + i];
+            slope += s->g[i] * s->dv[i];
+            if (fabs(s->dv[i]) > dmax) dmax = fabs(s->dv[i]);
+        }
+        if (!(slope < 0.0)) { /* not a descent direction (LDL^T of an
+                                 indefinite S): the mass-weighted gradient */
+            slope = 0.0;
+            for (long i = 0; i < n; i++) {
+                s->dv[i] = -s->g[i] * o->inv_mass[i / 3];
+                slope += s->g[i] * s->dv[i];
+            }
+            if (!(slope < 0.0)) break; /* at a stationary point */
+        }
+        if (h * dmax < 1e-12 * o->lattice->sigma) break; /* at the minimum */
+        double alpha = 1.0, p1 = 0.0;
+        for (;;) {
+            for (long i = 0; i < n; i++) s->r[i] = v[i] + alpha * s->dv[i];
+            int bad = phi(s, xn, s->r, h, &p1);
+            if (!bad && p1 <= p0 + ANIM_ARMIJO * alpha * slope) break;
+            alpha *= 0.5;
+            s->backtracks++;
+            if (alpha < ANIM_ALPHA_MIN) break;
+        }
+        if (alpha < ANIM_ALPHA_MIN) break; /* no decrease along dv: keep v */
+        for (long i = 0; i < n; i++) v[i] += alpha * s->dv[i];
+        p0 = p1;
+        /* converged: the last correction moved no particle by more than
+         * DRAPE_ANIMATE_XTOL of the spacing */
+        if (h * alpha * dmax <= DRAPE_ANIMATE_XTOL * o->lattice->sigma) break;
+    }
+    /* No energy out of nothing: the supports do no work, so the total
+     * energy may only fall.  Backward Euler can raise it where E is not
+     * convex (compressed springs, buckling): -h^2/2 v^T H v > 0 for
+     * negative curvature H.  Then the step is cut back: v <- beta v
+     * (beta = 1/2, 1/4, ...) until the positions x_n + h v hold no more
+     * potential energy than the total there was (beta -> 0 gives x_n,
+     * which holds less), and the velocities are scaled down to the energy
+     * left: more dissipation, never less, and no step is refused. */
+    for (long i = 0; i < n; i++) {
+        s->r[i] = xn[i] + h * v[i];
+        if (!isfinite(s->r[i]) || !isfinite(v[i])) return 1;
+    }
+    double ep, ek;
+    if (total_energy(s, s->r, v, &ep, &ek) != 0) return 1;
+    for (int k = 0; ep > s->e_tot + s->e_tol; k++) {
+        if (k == ANIM_CUTBACK_MAX) { /* x_n itself: no displacement */
+            for (long i = 0; i < n; i++) v[i] = 0.0;
+        } else {
+            for (long i = 0; i < n; i++) v[i] *= 0.5;
+        }
+        for (long i = 0; i < n; i++) s->r[i] = xn[i] + h * v[i];
+        if (total_energy(s, s->r, v, &ep, &ek) != 0) return 1;
+        if (k == ANIM_CUTBACK_MAX) break;
+    }
+    if (ep + ek > s->e_tot + s->e_tol) {
+        double sc = ek > 0.0 && s->e_tot > ep ? sqrt((s->e_tot - ep) / ek) : 0.0;
+        for (long i = 0; i < n; i++) v[i] *= sc;
+        ek *= sc * sc;
+        s->rescales++;
+    }
+    for (long i = 0; i < n; i++) {
+        y[i] = s->r[i];
+        y[n + i] = v[i];
+    }
+    s->e_tot = ep + ek;
+    return 0;
+}
+
+/* One step of h from s->y, as 2^k sub-steps if needed. */
+static int anim_step(anim *s, double h, drape_error *err)
+{
+    memcpy(s->y_prev, s->y, sizeof(double) * (size_t)s->dim);
+    double e0 = s->e_tot;
+    int e0_valid = s->e_valid;
+    for (int k = 0; k <= DRAPE_ANIMATE_MAX_HALVINGS; k++) {
+        s->e_tot = e0;
+        s->e_valid = e0_valid;
+        long nsub = 1L << k;
+        double hs = h / (double)nsub;
+        int rc = 0;
+        for (long j = 0; j < nsub && rc == 0; j++) rc = be_step(s, hs, s->y, err);
+        if (rc < 0) {
+            memcpy(s->y, s->y_prev, sizeof(double) * (size_t)s->dim);
+            return -1;
+        }
+        if (rc == 0) {
+            s->t_prev = s->t;
+            s->t += h;
+            s->steps++;
+            return 0;
+        }
+        s->halvings++;
+        memcpy(s->y, s->y_prev, sizeof(double) * (size_t)s->dim);
+    }
+    return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                           "animate: the step at t = %.6g s failed even as %ld steps of "
+                           "%.3g s (a folded hinge, a non-finite force or a singular "
+                           "matrix); hint: a smaller --substeps step, or a dynamic "
+                           "integrator", s->t, 1L << DRAPE_ANIMATE_MAX_HALVINGS,
+                           h / (double)(1L << DRAPE_ANIMATE_MAX_HALVINGS));
+}
+
+static int anim_get_state(void *st, double t, double *y, drape_error *err)
+{
+    anim *s = st;
+    if (fabs(t - s->t) > 1e-9 * s->h)
+        return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
+                               "animate has no dense output: state asked at t = %.9g s, "
+                               "current t = %.9g s", t, s->t);
+    memcpy(y, s->y, sizeof(double) * (size_t)s->dim);
+    return 0;
+}
+
+/* The next step from s->t: to the next point of the grid t0 + k h, or to
+ * t_out or t_stop if one of them comes first. */
+static double next_step(const anim *s, double t_out)
+{
+    double eps = 1e-9 * s->h;
+    double k = floor((s->t - s->t0) / s->h + 1e-9) + 1.0;
+    double end = s->t0 + k * s->h;
+    if (t_out < end - eps) end = t_out;
+    if (s->t_stop > 0.0 && s->t_stop < end - eps) end = s->t_stop;
+    return end - s->t;
+}
+
+static int anim_step_to(void *st, double t_out, drape_step_mode mode, double *t,
+                        double *y, drape_error *err)
+{
+    anim *s = st;
+    int rc = 0;
+    double eps = 1e-9 * s->h;
+    double bound = mode == DRAPE_STEP_ONE ? INFINITY : t_out;
+    if (s->t_stop > 0.0 && bound > s->t_stop) bound = s->t_stop;
+    long taken = 0;
+    while (s->t < bound - eps) {
+        if (++taken > s->max_steps) {
+            rc = drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                                 "animate failed at t = %.6g s: more than %ld steps "
+                                 "(max_steps) before t = %.6g s; hint: fewer --substeps, "
+                                 "or a larger --max-steps", s->t, s->max_steps, bound);
+            break;
+        }
+        double h = next_step(s, bound);
+        if ((rc = anim_step(s, h, err)) != 0) break;
+        if (fabs(s->t - bound) <= eps) s->t = bound; /* no drift at output points */
+        if (mode == DRAPE_STEP_ONE) break;
+    }
+    *t = s->t;
+    memcpy(y, s->y, sizeof(double) * (size_t)s->dim);
+    return rc;
+}
+
+static void anim_stats(const void *st, drape_integrator_stats *r)
+{
+    const anim *s = st;
+    memset(r, 0, sizeof *r);
+    r->switches = -1;
+    r->steps = s->steps;
+    r->rhs_evals = s->ode->n_rhs;
+    r->jac_evals = s->ode->n_jac;
+    r->lin_setups = s->factors + s->failed_factors;
+    r->lin_factors = s->factors;
+    r->nonlin_iters = s->newton;   /* Newton iterations, one solve each */
+    r->err_test_fails = s->backtracks; /* line-search halvings (no error test) */
+    r->conv_fails = s->halvings;
+    r->linsol = DRAPE_LINSOL_SCHUR_DIRECT;
+    r->energy_rescales = s->rescales;
+}
+
+const drape_integrator_type drape_integrator_animate = {
+    "animate",
+    "fixed-step linearly implicit Euler (Baraff & Witkin 1998), CHOLMOD on M - hD - h^2 K",
+    anim_alloc, anim_reinit, anim_step_to, anim_get_state, anim_stats, anim_free};
