@@ -73,7 +73,7 @@ TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/
 HEADERS  = $(wildcard include/drape/*.h src/*.h)
 
 .PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
-        bench-ensemble check-install \
+        bench-ensemble bench-animate check-install \
         asan valgrind fuzz install uninstall clean FORCE
 
 all: drape
@@ -146,6 +146,11 @@ bench: drape
 # Accurate against fast drape-test ensembles (issue 15; docs/ensemble.md).
 bench-ensemble: drape
 	scripts/bench-ensemble.sh
+
+# The animate method against backward Euler, and where its time goes
+# (issue 16; docs/animate.md).
+bench-animate: drape
+	scripts/bench-animate.sh
 
 # The default scene to equilibrium, the way it asks (issue 3).
 check-default: drape

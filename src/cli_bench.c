@@ -1,31 +1,21 @@
 /* cli_bench.c: `drape bench`: work-precision measurements of the
- * integrators on one scene (docs/performance.md; numerics.md section 5),
- * and `drape bench --kernels`: the cost of one force evaluation and one
- * Jacobian for hang lattices of growing size.
- *
- * Every run (reference and sweep point) happens in a forked child, so that
- * one slow point can be stopped at --max-wall (SIGKILL; recorded as
- * `timeout`) and an allocation failure (gsl-msbdf's dense matrices) ends
- * only that point.  The child inherits the model and the reference
- * samples, integrates with drape_sim_run (observer at the sample times),
- * computes its errors and DC, and writes one fixed-size record (plus the
- * samples, for a reference run) into a pipe.  Only this file, main.c and
- * the other cli_*.c print. */
+ * integrators on one scene (docs/performance.md; numerics.md section 5):
+ * its options, the sweep over integrators and tolerances (animate: over
+ * its fixed steps) after the reference pair, and the CSV.  Each point runs
+ * in a child process (cli_bench_point.c); `drape bench --kernels` is in
+ * cli_bench_kernels.c.  Only this file, main.c and the other cli_*.c
+ * print. */
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
-#include <poll.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <sys/types.h>
-#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_bench.h"
 #include "cli_data.h"
 #include "cli_io.h"
 #include "drape/alloc.h"
@@ -33,7 +23,6 @@
 #include "drape/fabric.h"
 #include "drape/integrator.h"
 #include "drape/lattice.h"
-#include "drape/linsol_schur.h"
 #include "drape/model.h"
 #include "drape/scene.h"
 #include "drape/sim.h"
@@ -41,7 +30,6 @@
 
 #define BENCH_DEFAULT_SCENE "scenes/cusick.yaml"
 #define BENCH_KERNEL_SCENE "scenes/hang.yaml"
-#define BENCH_MAX_LIST 64
 #define BENCH_REPEAT_BELOW_S 2.0      /* runs longer than this are not repeated */
 #define BENCH_DEFAULT_RTOLS "1e-3:1e-8:2"
 #define BENCH_DEFAULT_REF "arkode-erk,gsl-rk8pd"
@@ -52,9 +40,6 @@
 #define BENCH_DEFAULT_REPEAT 3
 #define BENCH_DEFAULT_MAX_WALL 300.0  /* s per run */
 #define BENCH_DEFAULT_SIZES "10,20,50,100,200"
-#define BENCH_KERNEL_MIN_BATCH_S 0.05 /* s of CPU per timed batch */
-#define BENCH_KERNEL_BATCHES 5
-#define BENCH_KERNEL_GAMMA 1e-4       /* s, gamma of the timed Schur factorisation */
 
 static const char bench_usage[] =
     "Usage: drape bench [SCENE.yaml] [OPTIONS]\n"
@@ -147,14 +132,8 @@ static const char *const bench_columns[] = {
     "err_pos_rms_rel", "err_final_rel", "err_final_v_rel", "dc", "dc_ref", "err_dc",
     "nodes", "message", "max_order", "step_s", NULL};
 
-static const char *const kernel_columns[] = {
-    "side", "particles", "free_particles", "nnz_K", "rhs_ms", "jac_ms",
-    "jac_first_order_ms", "schur_factor_ms", "rhs_us_per_free", "jac_us_per_free",
-    "schur_solve_ms", NULL};
-
-typedef enum pt_status { PT_OK, PT_FAILED, PT_TIMEOUT, PT_SKIPPED } pt_status;
-
-static const char *pt_status_name(int s)
+/* Name of a pt_status. */
+const char *drape_cli_bench_status_name(int s)
 {
     switch (s) {
     case PT_OK: return "ok";
@@ -163,53 +142,6 @@ static const char *pt_status_name(int s)
     default: return "skipped";
     }
 }
-
-/* One measured point: a fixed-size record, also the child -> parent message. */
-typedef struct bench_point {
-    char role[16];
-    int status;     /* pt_status */
-    int err_kind;   /* drape_error_kind of a failure */
-    char integrator[DRAPE_INTEGRATOR_NAME_MAX];
-    double rtol, atol;
-    double step;    /* animate: its fixed step, s; NaN for the others */
-    double wall_s, cpu_s;
-    int repeats;
-    drape_integrator_stats stats;
-    double err_pos, err_pos_rms, err_final, err_final_v;
-    double dc;
-    int nodes;      /* -1 = none */
-    char msg[DRAPE_ERROR_MSG_MAX + DRAPE_ERROR_FILE_MAX];
-} bench_point;
-
-typedef struct bench {
-    const char *scene_path;
-    drape_scene s;
-    drape_fabric f;
-    drape_lattice *L;
-    drape_model *m;
-    size_t n3;
-    double size;      /* m: largest extent of the rest lattice */
-    double t_end;     /* s */
-    int samples;      /* K */
-    double atol_scale;
-    int linsol;
-    int repeat;
-    double max_wall, ref_max_wall;
-    int has_dc;
-    char default_name[DRAPE_INTEGRATOR_NAME_MAX];
-    double *ref_x;    /* K x 3n: reference positions at t_k, k = 1..K */
-    double *ref_v;    /* 3n: reference velocities at t_end */
-    double ref_dc;
-    double steps[BENCH_MAX_LIST]; /* animate's steps, s (--steps) */
-    int n_steps;
-    double anim_step; /* the step of the animate point being run */
-    int progress;
-    /* output */
-    bench_point *rows;
-    int n_rows, cap_rows;
-    const char *out_dir;
-    char csv_path[4096];
-} bench;
 
 /* ---- small helpers -------------------------------------------------------- */
 
@@ -231,22 +163,13 @@ static int bench_quantity(const char *opt, const char *text, drape_dim dim, doub
     return 0;
 }
 
-static double cpu_now(void)
+double drape_cli_bench_cpu_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static double mono_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Split a comma-separated list in place: up to max items. -1 if too many
- * or an item is empty. */
 static int split_list(char *text, char **items, int max)
 {
     int n = 0;
@@ -316,264 +239,6 @@ static int integrator_known(const char *name)
     return 0;
 }
 
-/* ---- errors against the reference ------------------------------------------ */
-
-/* Positions of sample k (1..K) in a K x 3n array. */
-static const double *sample_at(const bench *b, const double *xs, int k)
-{
-    return xs + (size_t)(k - 1) * b->n3;
-}
-
-static void compute_errors(const bench *b, const double *xs, const double *v_end,
-                           bench_point *p)
-{
-    const drape_lattice *L = b->L;
-    double emax = 0.0, erms = 0.0, efin = 0.0, evfin = 0.0;
-    for (int k = 1; k <= b->samples; k++) {
-        const double *a = sample_at(b, xs, k), *r = sample_at(b, b->ref_x, k);
-        double mx = 0.0, ss = 0.0;
-        for (int i = 0; i < L->n; i++) {
-            double dx = a[3 * i] - r[3 * i], dy = a[3 * i + 1] - r[3 * i + 1],
-                   dz = a[3 * i + 2] - r[3 * i + 2];
-            double d2 = dx * dx + dy * dy + dz * dz;
-            ss += d2;
-            if (d2 > mx) mx = d2;
-        }
-        mx = sqrt(mx);
-        double rms = L->n > 0 ? sqrt(ss / L->n) : 0.0;
-        if (mx > emax) emax = mx;
-        if (rms > erms) erms = rms;
-        if (k == b->samples) efin = mx;
-    }
-    for (int i = 0; i < L->n; i++) {
-        double dx = v_end[3 * i] - b->ref_v[3 * i], dy = v_end[3 * i + 1] - b->ref_v[3 * i + 1],
-               dz = v_end[3 * i + 2] - b->ref_v[3 * i + 2];
-        double d = sqrt(dx * dx + dy * dy + dz * dz);
-        if (d > evfin) evfin = d;
-    }
-    p->err_pos = emax / b->size;
-    p->err_pos_rms = erms / b->size;
-    p->err_final = efin / b->size;
-    p->err_final_v = evfin / sqrt(DRAPE_G_STANDARD * b->size);
-}
-
-/* ---- one run, in a child ------------------------------------------------------ */
-
-typedef struct sample_ctx {
-    const bench *b;
-    double dt;
-    double *xs;   /* K x 3n */
-    int got;      /* samples stored */
-} sample_ctx;
-
-static int sample_observer(void *ctx, const drape_sim_event *ev, drape_error *err)
-{
-    (void)err;
-    sample_ctx *c = ctx;
-    if (!(ev->what & DRAPE_SIM_AT_FRAME)) return 0;
-    long k = lround(ev->t / c->dt);
-    if (k < 1 || k > c->b->samples) return 0;
-    memcpy(c->xs + (size_t)(k - 1) * c->b->n3, ev->x, sizeof(double) * c->b->n3);
-    c->got++;
-    return 0;
-}
-
-static int write_all(int fd, const void *buf, size_t n)
-{
-    const char *p = buf;
-    while (n > 0) {
-        ssize_t w = write(fd, p, n);
-        if (w < 0) {
-            if (errno == EINTR) continue;
-            return -1;
-        }
-        p += w;
-        n -= (size_t)w;
-    }
-    return 0;
-}
-
-static void point_error(bench_point *p, const drape_error *e)
-{
-    char buf[sizeof p->msg];
-    p->status = PT_FAILED;
-    p->err_kind = e->kind;
-    snprintf(p->msg, sizeof p->msg, "%s", drape_error_format(e, buf, sizeof buf));
-}
-
-/* The child's work: integrate, measure, write the record (and, with
- * want_samples, the K samples and the final velocities) to fd. */
-static void child_run(const bench *b, const char *integrator, double rtol,
-                      int want_samples, int fd)
-{
-    bench_point p;
-    memset(&p, 0, sizeof p);
-    p.status = PT_OK;
-    p.nodes = -1;
-    p.err_pos = p.err_pos_rms = p.err_final = p.err_final_v = p.dc = NAN;
-    snprintf(p.integrator, sizeof p.integrator, "%s", integrator);
-    int animate = strcmp(integrator, "animate") == 0;
-    p.rtol = animate ? NAN : rtol;
-    p.atol = animate ? NAN : rtol * b->atol_scale;
-    p.step = animate ? b->anim_step : NAN;
-    p.repeats = 1;
-    drape_error err;
-    drape_error_clear(&err);
-    drape_sim_result r;
-    memset(&r, 0, sizeof r);
-    sample_ctx sc = {b, b->t_end / b->samples, NULL, 0};
-    sc.xs = drape_malloc(sizeof(double) * b->n3 * (size_t)b->samples);
-    if (!sc.xs) {
-        drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory for the samples");
-        point_error(&p, &err);
-        goto send;
-    }
-    drape_sim_opts so;
-    drape_sim_opts_from_scene(&b->s, &so);
-    snprintf(so.integrator, sizeof so.integrator, "%s", integrator);
-    if (animate) {
-        so.fixed_step = b->anim_step; /* no tolerances */
-    } else {
-        so.rtol = rtol;
-        so.atol = p.atol;
-    }
-    so.t_max = b->t_end;
-    so.has_equilibrium = 0;
-    so.frame_every = sc.dt;
-    so.linsol = b->linsol;
-    so.observe_progress = 0;
-    double c0 = cpu_now();
-    int rc = drape_sim_run(b->m, &so, sample_observer, &sc, &r, &err);
-    p.cpu_s = cpu_now() - c0;
-    p.wall_s = r.wall_s;
-    p.stats = r.stats;
-    if (r.integrator[0]) snprintf(p.integrator, sizeof p.integrator, "%s", r.integrator);
-    if (rc != 0) {
-        point_error(&p, &err);
-        goto send;
-    }
-    if (sc.got != b->samples) {
-        drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
-                        "bench: %d of %d sample times seen", sc.got, b->samples);
-        point_error(&p, &err);
-        goto send;
-    }
-    if (b->ref_x) compute_errors(b, sc.xs, r.v, &p);
-    if (b->has_dc) {
-        drape_shadow sh;
-        drape_error e2;
-        drape_error_clear(&e2);
-        if (drape_shadow_measure(b->L, r.x, &sh, &e2) == 0) {
-            p.dc = sh.dc;
-            p.nodes = sh.nodes;
-        } else {
-            snprintf(p.msg, sizeof p.msg, "DC: %s", e2.msg);
-        }
-    }
-send:
-    if (write_all(fd, &p, sizeof p) == 0 && want_samples && p.status == PT_OK) {
-        if (write_all(fd, sc.xs, sizeof(double) * b->n3 * (size_t)b->samples) == 0)
-            write_all(fd, r.v, sizeof(double) * b->n3);
-    }
-    drape_free(sc.xs);
-    drape_sim_result_free(&r);
-}
-
-/* Read n bytes from fd before the deadline (monotonic s; <= 0: none).
- * 0 done, 1 timeout, -1 end of file or error. */
-static int read_until(int fd, void *buf, size_t n, double deadline)
-{
-    char *p = buf;
-    while (n > 0) {
-        int ms = -1;
-        if (deadline > 0) {
-            double left = deadline - mono_now();
-            if (left <= 0) return 1;
-            ms = left > 1e6 ? 1000000000 : (int)ceil(left * 1000.0);
-        }
-        struct pollfd pf = {fd, POLLIN, 0};
-        int pr = poll(&pf, 1, ms);
-        if (pr < 0) {
-            if (errno == EINTR) continue;
-            return -1;
-        }
-        if (pr == 0) return 1;
-        ssize_t got = read(fd, p, n);
-        if (got < 0) {
-            if (errno == EINTR) continue;
-            return -1;
-        }
-        if (got == 0) return -1;
-        p += got;
-        n -= (size_t)got;
-    }
-    return 0;
-}
-
-/* Run one point in a child with a wall-time limit (0 = none).  With xs/v
- * non-NULL, receive the samples too.  Returns 0, or -1 if the child could
- * not be started (err set). */
-static int run_point(const bench *b, const char *integrator, double rtol, double limit,
-                     double *xs, double *v, bench_point *p, drape_error *err)
-{
-    int fds[2];
-    if (pipe(fds) != 0)
-        return drape_error_set(err, DRAPE_E_IO, NULL, 0, 0, NULL, "pipe: %s", strerror(errno));
-    fflush(stdout);
-    fflush(stderr);
-    pid_t pid = fork();
-    if (pid < 0) {
-        close(fds[0]);
-        close(fds[1]);
-        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "fork: %s", strerror(errno));
-    }
-    if (pid == 0) {
-        close(fds[0]);
-        child_run(b, integrator, rtol, xs != NULL, fds[1]);
-        close(fds[1]);
-        _exit(0);
-    }
-    close(fds[1]);
-    double deadline = limit > 0 ? mono_now() + limit : 0.0;
-    int rr = read_until(fds[0], p, sizeof *p, deadline);
-    if (rr == 0 && p->status == PT_OK && xs) {
-        rr = read_until(fds[0], xs, sizeof(double) * b->n3 * (size_t)b->samples, deadline);
-        if (rr == 0) rr = read_until(fds[0], v, sizeof(double) * b->n3, deadline);
-    }
-    close(fds[0]);
-    if (rr == 1) kill(pid, SIGKILL);
-    int wst = 0;
-    while (waitpid(pid, &wst, 0) < 0 && errno == EINTR) {}
-    if (rr != 0) {
-        memset(p, 0, sizeof *p);
-        snprintf(p->integrator, sizeof p->integrator, "%s", integrator);
-        int animate = strcmp(integrator, "animate") == 0;
-        p->rtol = animate ? NAN : rtol;
-        p->atol = animate ? NAN : rtol * b->atol_scale;
-        p->step = animate ? b->anim_step : NAN;
-        p->nodes = -1;
-        p->err_pos = p->err_pos_rms = p->err_final = p->err_final_v = p->dc = NAN;
-        p->wall_s = p->cpu_s = NAN;
-        p->stats.steps = p->stats.rhs_evals = p->stats.jac_evals = -1;
-        p->stats.lin_setups = p->stats.lin_factors = p->stats.nonlin_iters = -1;
-        p->stats.err_test_fails = p->stats.conv_fails = -1;
-        if (rr == 1) {
-            p->status = PT_TIMEOUT;
-            p->wall_s = limit;
-            snprintf(p->msg, sizeof p->msg, "stopped after %g s of wall time (--max-wall)", limit);
-        } else {
-            p->status = PT_FAILED;
-            p->err_kind = DRAPE_E_INTERNAL;
-            if (WIFSIGNALED(wst))
-                snprintf(p->msg, sizeof p->msg, "the run was killed by signal %d%s",
-                         WTERMSIG(wst), WTERMSIG(wst) == SIGKILL ? " (out of memory?)" : "");
-            else
-                snprintf(p->msg, sizeof p->msg, "the run ended without a result");
-        }
-    }
-    return 0;
-}
-
 /* ---- output ------------------------------------------------------------------------ */
 
 static void put_num(FILE *o, double v)
@@ -585,7 +250,7 @@ static void put_count(FILE *o, long v)
     if (v >= 0) fprintf(o, "%ld", v);
 }
 
-static void write_header(FILE *o, const char *const *cols)
+void drape_cli_bench_header(FILE *o, const char *const *cols)
 {
     for (int i = 0; cols[i]; i++) fprintf(o, "%s%s", i ? "," : "", cols[i]);
     fputc('\n', o);
@@ -610,7 +275,7 @@ static void write_row(FILE *o, const bench *b, const bench_point *p)
     put_num(o, p->rtol);
     fputc(',', o);
     put_num(o, p->atol);
-    fprintf(o, ",%s,", pt_status_name(p->status));
+    fprintf(o, ",%s,", drape_cli_bench_status_name(p->status));
     put_num(o, p->wall_s);
     fputc(',', o);
     put_num(o, p->cpu_s);
@@ -652,7 +317,7 @@ static int flush_csv(bench *b, drape_error *err)
     if (!b->out_dir) return 0;
     drape_cli_afile a;
     if (drape_cli_afile_open(&a, b->csv_path, err) != 0) return -1;
-    write_header(a.f, bench_columns);
+    drape_cli_bench_header(a.f, bench_columns);
     for (int i = 0; i < b->n_rows; i++) write_row(a.f, b, &b->rows[i]);
     return drape_cli_afile_commit(&a, err);
 }
@@ -681,10 +346,10 @@ static void progress(const bench *b, const bench_point *p)
     if (!b->progress) return;
     if (isfinite(p->step))
         fprintf(stderr, "drape: bench %-9s %-11s step %-8.3g %-7s", p->role, p->integrator,
-                p->step, pt_status_name(p->status));
+                p->step, drape_cli_bench_status_name(p->status));
     else
         fprintf(stderr, "drape: bench %-9s %-11s rtol %-8.3g %-7s", p->role, p->integrator,
-                p->rtol, pt_status_name(p->status));
+                p->rtol, drape_cli_bench_status_name(p->status));
     if (p->status == PT_OK)
         fprintf(stderr, " wall %.3g s, cpu %.3g s, err_pos %.3g", p->wall_s, p->cpu_s, p->err_pos);
     else if (p->msg[0])
@@ -722,7 +387,7 @@ static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, i
                                "out of memory for the reference samples");
     double *rx = b->ref_x;
     b->ref_x = NULL; /* the reference child computes no errors */
-    if (run_point(b, ref[0], ref_rtol[0], b->ref_max_wall, rx, b->ref_v, &p, err) != 0) {
+    if (drape_cli_bench_point(b, ref[0], ref_rtol[0], b->ref_max_wall, rx, b->ref_v, &p, err) != 0) {
         b->ref_x = rx;
         return -1;
     }
@@ -736,16 +401,16 @@ static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, i
         return drape_error_set(err, p.status == PT_FAILED && p.err_kind == DRAPE_E_NOMEM
                                         ? DRAPE_E_NOMEM : DRAPE_E_NUMERIC,
                                NULL, 0, 0, NULL, "reference run %s at rtol %g: %s: %s", ref[0],
-                               ref_rtol[0], pt_status_name(p.status), p.msg);
+                               ref_rtol[0], drape_cli_bench_status_name(p.status), p.msg);
     /* the second reference, measured against the first */
-    if (run_point(b, ref[1], ref_rtol[1], b->ref_max_wall, NULL, NULL, &p, err) != 0) return -1;
+    if (drape_cli_bench_point(b, ref[1], ref_rtol[1], b->ref_max_wall, NULL, NULL, &p, err) != 0) return -1;
     snprintf(p.role, sizeof p.role, "ref-check");
     progress(b, &p);
     if (add_row(b, &p, err) != 0) return -1;
     double agree = p.status == PT_OK ? p.err_pos : NAN;
     if (!isfinite(agree))
         fprintf(stderr, "drape: warning: the reference check %s did not finish (%s); the "
-                        "reference is not confirmed\n", ref[1], pt_status_name(p.status));
+                        "reference is not confirmed\n", ref[1], drape_cli_bench_status_name(p.status));
 
     double smallest = INFINITY;
     for (int ii = 0; ii < n_integ; ii++) {
@@ -770,12 +435,12 @@ static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, i
                 p.wall_s = p.cpu_s = NAN;
                 snprintf(p.msg, sizeof p.msg, "a looser tolerance already timed out or ran out of memory");
             } else {
-                if (run_point(b, integ[ii], rtol_k, b->max_wall, NULL, NULL, &p, err) != 0)
+                if (drape_cli_bench_point(b, integ[ii], rtol_k, b->max_wall, NULL, NULL, &p, err) != 0)
                     return -1;
                 for (int rep = 1; rep < b->repeat && p.status == PT_OK &&
                                   p.wall_s < BENCH_REPEAT_BELOW_S; rep++) {
                     bench_point q;
-                    if (run_point(b, integ[ii], rtol_k, b->max_wall, NULL, NULL, &q, err) != 0)
+                    if (drape_cli_bench_point(b, integ[ii], rtol_k, b->max_wall, NULL, NULL, &q, err) != 0)
                         return -1;
                     if (q.status != PT_OK) break;
                     if (q.wall_s < p.wall_s) p.wall_s = q.wall_s;
@@ -797,167 +462,6 @@ static int run_sweep(bench *b, char **integ, int n_integ, const double *rtols, i
         fprintf(stderr, "drape: warning: the reference pair agrees to %.3g (err_pos_rel), more "
                         "than 1/100 of the smallest error measured (%.3g); tighten --ref-rtol\n",
                 agree, smallest);
-    return 0;
-}
-
-/* ---- kernels ------------------------------------------------------------------------ */
-
-enum { K_RHS, K_JAC, K_JAC1, K_SCHUR, K_SOLVE, K_COUNT };
-
-typedef struct kernel_ctx {
-    drape_model *m;
-    const double *x, *v;
-    double *f, *K, *D, *J;
-    drape_schur *schur;
-    const double *r; /* 6 nf: right-hand side of the Newton system */
-    double *z;       /* 6 nf: its solution */
-} kernel_ctx;
-
-static int kernel_call(kernel_ctx *c, int which, drape_error *err)
-{
-    switch (which) {
-    case K_RHS: return drape_model_forces(c->m, DRAPE_PART_ALL, c->x, c->v, c->f);
-    case K_JAC: return drape_model_jacobian(c->m, DRAPE_PART_ALL, c->x, c->v, c->K, c->D);
-    case K_JAC1:
-        return drape_model_jacobian_first_order(c->m, DRAPE_PART_ALL, 1, c->x, c->v, c->J);
-    case K_SCHUR: return drape_schur_factor(c->schur, c->K, c->D, BENCH_KERNEL_GAMMA, err);
-    default: return drape_schur_solve(c->schur, c->K, BENCH_KERNEL_GAMMA, c->r, c->z);
-    }
-}
-
-/* CPU seconds per call: minimum over BENCH_KERNEL_BATCHES batches of at
- * least BENCH_KERNEL_MIN_BATCH_S each (after one warm-up call). */
-static double kernel_time(kernel_ctx *c, int which, drape_error *err)
-{
-    if (kernel_call(c, which, err) != 0) return NAN;
-    double best = INFINITY;
-    for (int bt = 0; bt < BENCH_KERNEL_BATCHES; bt++) {
-        long calls = 0;
-        double t0 = cpu_now(), t;
-        do {
-            if (kernel_call(c, which, err) != 0) return NAN;
-            calls++;
-            t = cpu_now() - t0;
-        } while (t < BENCH_KERNEL_MIN_BATCH_S);
-        if (t / (double)calls < best) best = t / (double)calls;
-    }
-    return best;
-}
-
-static int kernels_one(const drape_scene *s0, const drape_fabric *f, int side, FILE *o,
-                       int progress_on, drape_error *err)
-{
-    drape_scene s = *s0;
-    drape_lattice *L = NULL;
-    drape_model *m = NULL;
-    drape_schur *schur = NULL;
-    double *x = NULL, *v = NULL, *fv = NULL, *K = NULL, *D = NULL, *J = NULL, *im = NULL;
-    double *r = NULL, *z = NULL;
-    int rc = -1;
-    s.shape = DRAPE_SHAPE_RECTANGLE;
-    s.width = s.height = (side - 1) * s.spacing;
-    if (drape_scene_check_with_fabric(&s, f, err) != 0) goto out;
-    L = drape_lattice_new(&s, f, err);
-    if (!L) goto out;
-    drape_model_opts mo;
-    drape_model_opts_from_scene(&s, &mo);
-    m = drape_model_new(L, f, &mo, err);
-    if (!m) goto out;
-    size_t n3 = 3 * (size_t)L->n;
-    const drape_pattern *P = drape_model_pattern(m);
-    const drape_pattern *P1 = drape_model_pattern_first_order(m);
-    x = drape_malloc(sizeof(double) * n3);
-    v = drape_malloc(sizeof(double) * n3);
-    fv = drape_malloc(sizeof(double) * n3);
-    K = drape_malloc(sizeof(double) * (size_t)(P->nnz ? P->nnz : 1));
-    D = drape_malloc(sizeof(double) * (size_t)(P->nnz ? P->nnz : 1));
-    J = drape_malloc(sizeof(double) * (size_t)(P1->nnz ? P1->nnz : 1));
-    im = drape_malloc(sizeof(double) * (size_t)(L->n_free ? L->n_free : 1));
-    size_t n6 = 6 * (size_t)(L->n_free ? L->n_free : 1);
-    r = drape_malloc(sizeof(double) * n6);
-    z = drape_malloc(sizeof(double) * n6);
-    if (!x || !v || !fv || !K || !D || !J || !im || !r || !z) {
-        drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
-        goto out;
-    }
-    /* a deterministic state off the flat rest state: smooth waves of 2 % of
-     * the spacing in z and 0.5 % in-plane, small velocities */
-    for (int i = 0; i < L->n; i++) {
-        double gi = L->gi[i], gj = L->gj[i];
-        double a = 0.02 * s.spacing, w = 0.5 * sin(0.37 * gi + 0.11) * cos(0.23 * gj + 0.7);
-        x[3 * i] = L->xinit[3 * i] + 0.25 * a * sin(0.51 * gj + 0.3);
-        x[3 * i + 1] = L->xinit[3 * i + 1] + 0.25 * a * cos(0.43 * gi);
-        x[3 * i + 2] = L->xinit[3 * i + 2] + a * w;
-        v[3 * i] = 1e-3 * w;
-        v[3 * i + 1] = -1e-3 * w;
-        v[3 * i + 2] = 1e-2 * w;
-        if (L->free_id[i] >= 0) im[L->free_id[i]] = 1.0 / L->mass[i];
-    }
-    for (size_t k = 0; k < n6; k++) r[k] = 1e-6 * sin(0.7 * (double)k + 0.2);
-    schur = drape_schur_new(P, im, err);
-    if (!schur) goto out;
-    kernel_ctx c = {m, x, v, fv, K, D, J, schur, r, z};
-    double t[K_COUNT];
-    for (int k = 0; k < K_COUNT; k++) {
-        if (k == K_SCHUR && kernel_call(&c, K_JAC, err) != 0) {
-            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL, "Jacobian failed");
-            goto out;
-        }
-        t[k] = kernel_time(&c, k, err);
-        if (!isfinite(t[k])) {
-            drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
-                            "kernel %d failed on the %d x %d lattice", k, side, side);
-            goto out;
-        }
-    }
-    fprintf(o, "%d,%d,%d,%ld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", side, L->n, L->n_free,
-            (long)P->nnz, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_JAC1], 1e3 * t[K_SCHUR],
-            1e6 * t[K_RHS] / L->n_free, 1e6 * t[K_JAC] / L->n_free, 1e3 * t[K_SOLVE]);
-    if (progress_on)
-        fprintf(stderr, "drape: bench kernels %d x %d: rhs %.3g ms, jac %.3g ms, schur %.3g ms, "
-                "solve %.3g ms\n", side, side, 1e3 * t[K_RHS], 1e3 * t[K_JAC], 1e3 * t[K_SCHUR],
-                1e3 * t[K_SOLVE]);
-    rc = 0;
-out:
-    drape_schur_free(schur);
-    drape_free(x);
-    drape_free(v);
-    drape_free(fv);
-    drape_free(K);
-    drape_free(D);
-    drape_free(J);
-    drape_free(im);
-    drape_free(r);
-    drape_free(z);
-    drape_model_free(m);
-    drape_lattice_free(L);
-    return rc;
-}
-
-static int run_kernels(const drape_scene *s, const drape_fabric *f, const int *sizes,
-                       int n_sizes, const char *out_dir, const char *name, int progress_on,
-                       drape_error *err)
-{
-    drape_cli_afile a;
-    FILE *o = stdout;
-    char path[4096];
-    if (out_dir) {
-        if (drape_cli_ensure_dir(out_dir, NULL, err) != 0) return -1;
-        snprintf(path, sizeof path, "%s/%s.csv", out_dir, name ? name : "kernels");
-        if (drape_cli_afile_open(&a, path, err) != 0) return -1;
-        o = a.f;
-    }
-    write_header(o, kernel_columns);
-    for (int i = 0; i < n_sizes; i++) {
-        if (kernels_one(s, f, sizes[i], o, progress_on, err) != 0) {
-            if (out_dir) drape_cli_afile_abort(&a);
-            return -1;
-        }
-        if (!out_dir) fflush(stdout);
-    }
-    if (out_dir) return drape_cli_afile_commit(&a, err);
-    if (fflush(stdout) != 0)
-        return drape_error_set(err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the CSV");
     return 0;
 }
 
@@ -1174,7 +678,7 @@ int drape_cli_bench(int argc, char **argv)
                             drape_scene_kind_name(b.s.kind));
             goto fail;
         }
-        if (run_kernels(&b.s, &b.f, sizes, n_sizes, out_dir, name, b.progress, &err) != 0)
+        if (drape_cli_bench_kernels(&b.s, &b.f, sizes, n_sizes, out_dir, name, b.progress, &err) != 0)
             goto fail;
         goto out;
     }
@@ -1225,7 +729,7 @@ int drape_cli_bench(int argc, char **argv)
         if (drape_cli_ensure_dir(out_dir, NULL, &err) != 0) goto fail;
         csv_path(&b, name, scene_path);
     } else {
-        write_header(stdout, bench_columns);
+        drape_cli_bench_header(stdout, bench_columns);
     }
     if (run_sweep(&b, integ, n_integ, rtols, n_rtols, ref, ref_rtol, &err) != 0) goto fail;
     if (out_dir && b.progress) fprintf(stderr, "drape: bench: wrote %s\n", b.csv_path);

@@ -453,6 +453,11 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_time > 0) s.fall_time = ra->fall_time;
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
     if (ra->substeps > 0) s.substeps = ra->substeps;
+    if (ri && ri->fixed_step > 0.0) { /* animate's step (its --substeps) */
+        double frame;
+        drape_scene_animate_step(&s, &frame, NULL);
+        s.substeps = (int)lround(frame / ri->fixed_step);
+    }
     /* --resume continues a dynamic run (only those are interrupted with a
      * checkpoint); otherwise --method, the scene's solver.method, and the
      * default: the fall method where the scene asks for an equilibrium */
