@@ -45,19 +45,32 @@
  * correction moves no particle by more than XTOL spacings
  * (docs/animate.md). */
 #ifndef DRAPE_ANIMATE_NEWTON_MAX
-#define DRAPE_ANIMATE_NEWTON_MAX 4
+#define DRAPE_ANIMATE_NEWTON_MAX 6
+#endif
+#ifndef DRAPE_ANIMATE_REFRESH /* refactor every this many iterations; 0 never */
+#define DRAPE_ANIMATE_REFRESH 0
+#endif
+#ifndef DRAPE_ANIMATE_PREDICT
+#define DRAPE_ANIMATE_PREDICT 1
 #endif
 #ifndef DRAPE_ANIMATE_XTOL
-#define DRAPE_ANIMATE_XTOL 1e-3
+#define DRAPE_ANIMATE_XTOL 2e-3
 #endif
 /* Armijo constant and the smallest step fraction of the line search. */
 #define ANIM_ARMIJO 1e-4
 #define ANIM_ALPHA_MIN (1.0 / 1024.0)
-/* Halvings of a step's velocity before it is set to zero (energy cut-back). */
-#define ANIM_CUTBACK_MAX 30
+/* Refactor when a correction is more than this fraction of the last one
+ * or the line search shortened it (adaptive refresh). */
+#define ANIM_CONTRACTION 0.25
+/* Bisection steps of the energy cut-back (beta to 1/256). */
+#define ANIM_CUTBACK_MAX 8
 /* The shift mu M of an indefinite S: from ANIM_SHIFT_MIN by factors of 10. */
 #define ANIM_SHIFT_MIN 1e-2
 #define ANIM_SHIFT_MAX 1e4
+#ifndef ANIM_SHIFT_START
+#define ANIM_SHIFT_START 1.0
+#endif
+#define ANIM_SHIFT_START_MIN (ANIM_SHIFT_MIN / ANIM_SHIFT_START)
 
 #define PARTS_CONS (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY)
 #define PARTS_DAMP (DRAPE_PART_AIR | DRAPE_PART_EDGE)
@@ -71,14 +84,19 @@ typedef struct anim {
     double t0;            /* start: the step grid is t0 + k h */
     double t, t_prev;     /* current time and the start of the last step */
     double *y, *y_prev;   /* dim */
-    double *r, *z;        /* dim: right-hand sides and solutions */
+    double *r, *z, *w;    /* dim: right-hand sides and solutions; w: [0; v] */
     double *vn, *vt, *g, *dv; /* nf3: v_n, trial v, gradient of Phi, direction */
     double *K, *D, *Kc;   /* nnz of the model pattern */
     double *Kd;           /* nnz: the dampers' dK (not used: D_n frozen) */
     int have_d;
+    int d_const, d_valid; /* D does not depend on the state (air drag only); computed */
     drape_schur *schur;
     long steps, halvings, factors, failed_factors, newton, backtracks;
     long rescales;        /* steps whose velocities were scaled down */
+    int refresh;          /* refactor every this many Newton iterations; 0 never */
+    double *vlast;        /* nf3: v at the start of the last step */
+    double h_last;        /* its size; 0 = none (restart) */
+    double mu_last;       /* the shift of the last factorisation */
     long shifts;          /* factorisations that needed the shift mu M */
     long *dpos;           /* nf3: the diagonal's slots in the pattern */
     double e_tot;         /* total energy (kinetic + potential) at y, J */
@@ -100,7 +118,9 @@ static void anim_free(void *st)
     drape_free(s->Kc);
     drape_free(s->Kd);
     drape_free(s->dpos);
+    drape_free(s->vlast);
     drape_free(s->z);
+    drape_free(s->w);
     drape_free(s->vn);
     drape_free(s->vt);
     drape_free(s->g);
@@ -135,14 +155,16 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
     s->Kc = drape_malloc(sizeof(double) * nnz);
     s->Kd = drape_malloc(sizeof(double) * nnz);
     s->z = drape_malloc(sizeof(double) * dim);
+    s->w = drape_malloc(sizeof(double) * dim);
     size_t n3 = (size_t)(s->nf3 ? s->nf3 : 1);
     s->vn = drape_malloc(sizeof(double) * n3);
     s->vt = drape_malloc(sizeof(double) * n3);
     s->g = drape_malloc(sizeof(double) * n3);
     s->dv = drape_malloc(sizeof(double) * n3);
     s->dpos = drape_malloc(sizeof(long) * n3);
-    if (!s->y || !s->y_prev || !s->r || !s->K || !s->D || !s->Kc || !s->Kd || !s->z ||
-        !s->vn || !s->vt || !s->g || !s->dv || !s->dpos)
+    s->vlast = drape_malloc(sizeof(double) * n3);
+    if (!s->y || !s->y_prev || !s->r || !s->K || !s->D || !s->Kc || !s->Kd || !s->z || !s->w ||
+        !s->vn || !s->vt || !s->g || !s->dv || !s->dpos || !s->vlast)
         goto nomem;
     for (long j = 0; j < s->nf3; j++) {
         s->dpos[j] = -1;
@@ -156,12 +178,14 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
         }
     }
     s->have_d = (ode->parts & (DRAPE_PART_AIR | DRAPE_PART_EDGE)) != 0;
+    s->d_const = (ode->parts & DRAPE_PART_EDGE) == 0;
     s->schur = drape_schur_new(P, ode->inv_mass, err);
     if (!s->schur) {
         anim_free(s);
         return NULL;
     }
     drape_schur_ldl_fallback(s->schur, 0);
+    s->refresh = DRAPE_ANIMATE_REFRESH;
     memcpy(s->y, y0, sizeof(double) * dim);
     memcpy(s->y_prev, y0, sizeof(double) * dim);
     /* roundoff of the energy: relative 1e-12 of m g over the extent */
@@ -191,6 +215,8 @@ static int anim_reinit(void *st, double t0, const double *y0, drape_error *err)
     s->steps = s->halvings = s->factors = s->failed_factors = s->newton = s->backtracks = 0;
     s->rescales = s->shifts = 0;
     s->e_valid = 0;
+    s->h_last = 0.0;
+    s->mu_last = 0.0;
     return 0;
 }
 
@@ -223,11 +249,12 @@ static int phi(anim *s, const double *xn, const double *v, double h, double *out
         double d = v[i] - s->vn[i];
         kin += d * d / im[i / 3];
     }
-    /* v^T D_n v through the Schur solver's product: z = [v2; M^-1 D v] */
-    memset(s->r, 0, sizeof(double) * (size_t)s->nf3);
-    memcpy(s->r + s->nf3, v, sizeof(double) * (size_t)s->nf3);
+    /* v^T D_n v through the Schur solver's product: z = [v2; M^-1 D v]
+     * (w, not r: v may be r, the line search's trial) */
+    memset(s->w, 0, sizeof(double) * (size_t)s->nf3);
+    memcpy(s->w + s->nf3, v, sizeof(double) * (size_t)s->nf3);
     if (s->have_d) {
-        drape_schur_jtimes(s->schur, s->K, s->D, s->r, s->z);
+        drape_schur_jtimes(s->schur, s->K, s->D, s->w, s->z);
         for (long i = 0; i < s->nf3; i++) damp += v[i] * s->z[s->nf3 + i] / im[i / 3];
     }
     double p = 0.5 * kin + E.stretch + E.bend + E.shear + E.gravity - 0.5 * h * damp;
@@ -265,9 +292,9 @@ static int phi_grad(anim *s, const double *xn, const double *v, double h)
     if (rc != 0) return rc;
     for (long i = 0; i < s->nf3; i++) s->g[i] = (v[i] - s->vn[i]) / im[i / 3] - h * s->z[s->nf3 + i] / im[i / 3];
     if (s->have_d) {
-        memset(s->r, 0, sizeof(double) * (size_t)s->nf3);
-        memcpy(s->r + s->nf3, v, sizeof(double) * (size_t)s->nf3);
-        drape_schur_jtimes(s->schur, s->K, s->D, s->r, s->z);
+        memset(s->w, 0, sizeof(double) * (size_t)s->nf3);
+        memcpy(s->w + s->nf3, v, sizeof(double) * (size_t)s->nf3);
+        drape_schur_jtimes(s->schur, s->K, s->D, s->w, s->z);
         for (long i = 0; i < s->nf3; i++) s->g[i] -= h * s->z[s->nf3 + i] / im[i / 3];
     }
     for (long i = 0; i < s->nf3; i++)
@@ -275,44 +302,27 @@ static int phi_grad(anim *s, const double *xn, const double *v, double h)
     return 0;
 }
 
-/* One backward Euler step of size h from y into y.  Returns 0, 1
- * (recoverable: fold, non-finite value, S not factorable), -1 (interrupted
- * or out of memory; err set). */
-static int be_step(anim *s, double h, double *y, drape_error *err)
+/* K + Kc at x_n + h v, and S = M - h D - h^2 (K + Kc) factored; where
+ * bending or shear make it indefinite, S + mu M with mu = 1e-2, 1e-1, ...
+ * (a Levenberg-Marquardt shift: the direction stays one of descent for
+ * Phi, and the factor a supernodal LL^T).  0, 1 (recoverable), -1. */
+static int factor_at(anim *s, const double *xn, const double *v, double h, drape_error *err)
 {
     drape_ode *o = s->ode;
     long n = s->nf3, nnz = drape_model_pattern(o->model)->nnz;
-    const double *xn = y; /* y[0..n) = x_n stays until the end */
-    double *v = s->vt;
-    memcpy(s->vn, y + n, sizeof(double) * (size_t)n);
-    if (!s->e_valid) {
-        double ep, ek;
-        if (total_energy(s, y, y + n, &ep, &ek) != 0) return 1;
-        s->e_tot = ep + ek;
-        s->e_valid = 1;
-    }
-    memcpy(v, s->vn, sizeof(double) * (size_t)n); /* Newton from v = v_n */
-    /* D_n at (x_n, v_n); K + Kc at the predictor x_n + h v_n */
-    if (s->have_d) {
-        scatter_xv(s, xn, s->vn, 0.0);
-        o->n_jac++;
-        if (drape_model_jacobian(o->model, o->parts & PARTS_DAMP, o->x, o->v, s->Kd, s->D) != 0)
-            return 1;
-    }
     scatter_xv(s, xn, v, h);
     o->n_jac++;
     if (drape_model_jacobian(o->model, o->parts & PARTS_CONS, o->x, o->v, s->K, NULL) != 0) return 1;
     drape_model_compression_clamp(o->model, o->x, NULL, s->Kc);
     for (long k = 0; k < nnz; k++) s->K[k] += s->Kc[k];
-    /* S = M - h D - h^2 (K + Kc); where bending or shear make it
-     * indefinite, S + mu M with mu = 1e-2, 1e-1, ... (a Levenberg-Marquardt
-     * shift: the direction stays one of descent for Phi, and the factor a
-     * supernodal LL^T) */
-    int rc;
-    double mu = 0.0;
+    /* start from a tenth of the last shift that was needed (a refused
+     * LL^T costs part of a factorisation) */
+    double mu = s->mu_last >= ANIM_SHIFT_START_MIN ? ANIM_SHIFT_START * s->mu_last : 0.0;
+    if (mu > 0.0)
+        for (long j = 0; j < n; j++) s->K[s->dpos[j]] -= mu / (h * h) / o->inv_mass[j / 3];
     for (;;) {
         drape_error_clear(&s->serr);
-        rc = drape_schur_factor(s->schur, s->K, s->have_d ? s->D : NULL, h, &s->serr);
+        int rc = drape_schur_factor(s->schur, s->K, s->have_d ? s->D : NULL, h, &s->serr);
         if (rc < 0) {
             *err = s->serr;
             return -1;
@@ -327,10 +337,81 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
         mu = mu_next;
     }
     if (mu > 0.0) s->shifts++;
+    s->mu_last = mu;
     s->factors++;
+    return 0;
+}
+
+/* Largest |(dv_b - dv_a) . u| over the stretch edges, u the edge's
+ * direction at x_n + h v: how much the correction dv changes a length,
+ * per unit h alpha. */
+static double edge_change(const anim *s, const double *xn, const double *v, double h)
+{
+    const drape_lattice *L = s->ode->lattice;
+    double best = 0.0;
+    for (int e = 0; e < L->n_edges; e++) {
+        int a = L->free_id[L->edges[e].a], b = L->free_id[L->edges[e].b];
+        if (a < 0 && b < 0) continue;
+        double d[3], dd[3], l2 = 0.0, p = 0.0;
+        for (int c = 0; c < 3; c++) {
+            double xa = a >= 0 ? xn[3 * a + c] + h * v[3 * a + c] : L->xinit[3 * L->edges[e].a + c];
+            double xb = b >= 0 ? xn[3 * b + c] + h * v[3 * b + c] : L->xinit[3 * L->edges[e].b + c];
+            d[c] = xb - xa;
+            dd[c] = (b >= 0 ? s->dv[3 * b + c] : 0.0) - (a >= 0 ? s->dv[3 * a + c] : 0.0);
+            l2 += d[c] * d[c];
+        }
+        if (!(l2 > 0.0)) continue;
+        for (int c = 0; c < 3; c++) p += d[c] * dd[c];
+        p = fabs(p) / sqrt(l2);
+        if (p > best) best = p;
+    }
+    return best;
+}
+
+/* One backward Euler step of size h from y into y.  Returns 0, 1
+ * (recoverable: fold, non-finite value, S not factorable), -1 (interrupted
+ * or out of memory; err set). */
+static int be_step(anim *s, double h, double *y, drape_error *err)
+{
+    drape_ode *o = s->ode;
+    long n = s->nf3;
+    const double *xn = y; /* y[0..n) = x_n stays until the end */
+    double *v = s->vt;
+    memcpy(s->vn, y + n, sizeof(double) * (size_t)n);
+    if (!s->e_valid) {
+        double ep, ek;
+        if (total_energy(s, y, y + n, &ep, &ek) != 0) return 1;
+        s->e_tot = ep + ek;
+        s->e_valid = 1;
+    }
+    /* Newton from v = v_n, or (DRAPE_ANIMATE_PREDICT) from the velocity
+     * extrapolated from the last step, v_n + (v_n - v_n-1) h / h_n-1,
+     * whichever has the lower Phi */
+    memcpy(v, s->vn, sizeof(double) * (size_t)n);
+    if (DRAPE_ANIMATE_PREDICT && s->h_last > 0.0) {
+        double q = h / s->h_last, pa, pb;
+        for (long i = 0; i < n; i++) s->dv[i] = s->vn[i] + q * (s->vn[i] - s->vlast[i]);
+        if (phi(s, xn, v, h, &pa) == 0 && phi(s, xn, s->dv, h, &pb) == 0 && pb < pa)
+            memcpy(v, s->dv, sizeof(double) * (size_t)n);
+    }
+    /* D_n at (x_n, v_n); K + Kc at the predictor x_n + h v_n */
+    /* (air drag alone: D = -c M, the same at every step) */
+    if (s->have_d && !(s->d_const && s->d_valid)) {
+        scatter_xv(s, xn, s->vn, 0.0);
+        o->n_jac++;
+        if (drape_model_jacobian(o->model, o->parts & PARTS_DAMP, o->x, o->v, s->Kd, s->D) != 0)
+            return 1;
+        s->d_valid = 1;
+    }
+    int rc = factor_at(s, xn, v, h, err);
+    if (rc != 0) return rc;
     double p0;
     if (phi(s, xn, v, h, &p0) != 0) return 1;
+    int stale = 0; /* the last iteration converged slowly: refactor */
+    double last_move = INFINITY;
     for (int it = 0; it < DRAPE_ANIMATE_NEWTON_MAX; it++) {
+        int refresh = s->refresh > 0 ? it > 0 && it % s->refresh == 0 : stale;
+        if (refresh && (rc = factor_at(s, xn, v, h, err)) != 0) return rc;
         rc = phi_grad(s, xn, v, h);
         if (rc < 0)
             return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
@@ -369,9 +450,15 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
         if (alpha < ANIM_ALPHA_MIN) break; /* no decrease along dv: keep v */
         for (long i = 0; i < n; i++) v[i] += alpha * s->dv[i];
         p0 = p1;
-        /* converged: the last correction moved no particle by more than
-         * DRAPE_ANIMATE_XTOL of the spacing */
-        if (h * alpha * dmax <= DRAPE_ANIMATE_XTOL * o->lattice->sigma) break;
+        /* adaptive refresh (refresh = 0): the frozen matrix is kept while
+         * the iteration contracts fast and takes full steps */
+        double move = alpha * dmax;
+        stale = alpha < 1.0 || move > ANIM_CONTRACTION * last_move;
+        last_move = move;
+        /* converged: the last correction changed no edge's length by more
+         * than DRAPE_ANIMATE_XTOL of the spacing (a strain of that size;
+         * rigid motion of the cloth is not what the iteration must settle) */
+        if (h * alpha * edge_change(s, xn, v, h) <= DRAPE_ANIMATE_XTOL * o->lattice->sigma) break;
     }
     /* No energy out of nothing: the supports do no work, so the total
      * energy may only fall.  Backward Euler can raise it where E is not
@@ -386,23 +473,36 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
         if (!isfinite(s->r[i]) || !isfinite(v[i])) return 1;
     }
     double ep, ek;
+    int guarded = 0;
     if (total_energy(s, s->r, v, &ep, &ek) != 0) return 1;
-    for (int k = 0; ep > s->e_tot + s->e_tol; k++) {
-        if (k == ANIM_CUTBACK_MAX) { /* x_n itself: no displacement */
-            for (long i = 0; i < n; i++) v[i] = 0.0;
-        } else {
-            for (long i = 0; i < n; i++) v[i] *= 0.5;
+    if (ep > s->e_tot + s->e_tol) {
+        /* bisect for the largest beta whose state (x_n + h beta v, beta v)
+         * holds no more energy than there was: beta = 0 does */
+        double lo = 0.0, hi = 1.0, ek1 = ek;
+        for (int k = 0; k < ANIM_CUTBACK_MAX; k++) {
+            double mid = 0.5 * (lo + hi), em, kk;
+            for (long i = 0; i < n; i++) s->r[i] = xn[i] + h * mid * v[i];
+            if (total_energy(s, s->r, v, &em, &kk) == 0 && em + mid * mid * ek1 <= s->e_tot + s->e_tol)
+                lo = mid;
+            else
+                hi = mid;
         }
-        for (long i = 0; i < n; i++) s->r[i] = xn[i] + h * v[i];
+        for (long i = 0; i < n; i++) {
+            v[i] *= lo;
+            s->r[i] = xn[i] + h * v[i];
+        }
         if (total_energy(s, s->r, v, &ep, &ek) != 0) return 1;
-        if (k == ANIM_CUTBACK_MAX) break;
+        guarded = 1;
     }
     if (ep + ek > s->e_tot + s->e_tol) {
         double sc = ek > 0.0 && s->e_tot > ep ? sqrt((s->e_tot - ep) / ek) : 0.0;
         for (long i = 0; i < n; i++) v[i] *= sc;
         ek *= sc * sc;
-        s->rescales++;
+        guarded = 1;
     }
+    s->rescales += guarded;
+    memcpy(s->vlast, s->vn, sizeof(double) * (size_t)n);
+    s->h_last = h;
     for (long i = 0; i < n; i++) {
         y[i] = s->r[i];
         y[n + i] = v[i];

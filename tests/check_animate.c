@@ -227,7 +227,7 @@ START_TEST(test_steps_and_grid)
     drape_integrator_stats st;
     drape_integrator_get_stats(I, &st);
     ck_assert_int_eq(st.steps, 31); /* 30 on the grid, one split by 2.5 h */
-    ck_assert_int_eq(st.lin_factors, 31);
+    ck_assert(st.lin_factors >= 31);   /* at least one per step */
     ck_assert_int_eq(st.conv_fails, 0);
     ck_assert(st.energy_rescales >= 0);
     drape_integrator_free(I);

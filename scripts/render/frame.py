@@ -6,7 +6,7 @@
 #   xvfb-run -a pvbatch scripts/render/frame.py DIR/drape.xmf TIME OUT.png [TITLE]
 import sys
 
-from paraview.simple import (GetActiveViewOrCreate, GetAnimationScene, Render,
+from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetAnimationScene, Render,
                              ResetCamera, SaveScreenshot, Show, Text, XDMFReader)
 
 xmf, t, png = sys.argv[1], float(sys.argv[2]), sys.argv[3]
@@ -19,7 +19,7 @@ scene = GetAnimationScene()
 scene.UpdateAnimationUsingDataTimeSteps()
 scene.AnimationTime = near
 view = GetActiveViewOrCreate("RenderView")
-view.ViewSize = [1200, 900]
+view.ViewSize = [800, 600]
 view.Background = [1.0, 1.0, 1.0]
 try:
     view.UseColorPaletteForBackground = 0
@@ -27,12 +27,17 @@ except AttributeError:
     pass
 view.OrientationAxesVisibility = 0
 d = Show(reader, view)
-d.Representation = "Surface With Edges"
-d.AmbientColor = d.DiffuseColor = [0.80, 0.62, 0.45]
-d.EdgeColor = [0.35, 0.25, 0.18]
-d.Specular = 0.2
-view.CameraPosition = [1.6, -2.4, 0.9]
-view.CameraFocalPoint = [0.0, 0.0, -0.35]
+ColorBy(d, None)                   # one cloth colour, not a data array
+d.Representation = "Surface"
+d.AmbientColor = d.DiffuseColor = [0.85, 0.68, 0.50]
+d.Specular = 0.3
+d.Interpolation = "Gouraud"
+# a three-quarter view from the front, slightly above
+b = reader.GetDataInformation().GetBounds()
+c = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
+r = max(b[1] - b[0], b[3] - b[2], b[5] - b[4])
+view.CameraFocalPoint = c
+view.CameraPosition = [c[0] + 1.2 * r, c[1] - 2.0 * r, c[2] + 0.6 * r]
 view.CameraViewUp = [0.0, 0.0, 1.0]
 ResetCamera()
 label = Text(Text="%s t = %.3f s (%d frames in the file)" % (title, near, len(times)))
@@ -40,5 +45,5 @@ ld = Show(label, view)
 ld.Color = [0.1, 0.1, 0.1]
 ld.FontSize = 14
 Render()
-SaveScreenshot(png, view, ImageResolution=[1200, 900])
+SaveScreenshot(png, view, ImageResolution=[800, 600])
 print("rendered t = %.4f s of %d time steps into %s" % (near, len(times), png))
