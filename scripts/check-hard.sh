@@ -31,9 +31,10 @@
 # which is at most E(0) + 0.01 M g L - E_grav.
 #
 # Environment: DRAPE_BIN (default ./drape), CHECK_HARD_TIMEOUT (seconds per
-# run, default 300), CHECK_HARD_INTEGRATORS (default `auto`, the scenes'
-# own; e.g. "auto arkode-imex" runs every case with each, and the table
-# gets one row per integrator), CHECK_HARD_UPDATE_DOC=1 (same as --update-doc, which
+# run, default 300), CHECK_HARD_INTEGRATORS (default `auto animate`: the
+# scenes' own and the fixed-step animate method of issue 16; e.g. "auto
+# arkode-imex" runs every case with each, and the table gets one row per
+# integrator), CHECK_HARD_UPDATE_DOC=1 (same as --update-doc, which
 # rewrites the table between the GENERATED markers of docs/stability.md).
 # Exit status 0 if every run kept the contract, 1 if not, 2 on a usage or
 # set-up error. --self-test checks the checker: a fake drape (the real one
