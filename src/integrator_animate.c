@@ -9,17 +9,26 @@
  * of the incremental potential (Martin et al. 2011; Gast et al. 2015)
  *     Phi(v) = 1/2 (v - v_n)^T M (v - v_n) + E(x_n + h v) - h/2 v^T D_n v.
  * Each step minimises Phi by at most DRAPE_ANIMATE_NEWTON_MAX Newton
- * iterations from v = v_n, all with one matrix
+ * iterations with a backtracking (Armijo) line search on Phi, from the
+ * better of v_n and the velocity extrapolated from the last step.  The
+ * Newton matrix
  *     S = M - h D_n - h^2 (K + Kc),
- * K = df_c/dx at x_n + h v_n and Kc the clamp of compressed springs
- * (model.h: S stays positive definite), factored once per step by CHOLMOD
- * (linsol_schur.h), and a backtracking (Armijo) line search on Phi.  The
- * first iteration with a full step is the linearised backward Euler of
- * Baraff & Witkin (1998); the line search is what makes a step safe when
- * the linearisation overshoots (a stretch edge at the pins at a 33 ms
- * step): Phi never increases, and nothing can fail to converge, since
- * the step is taken after the iterations whatever their residual.  The
- * error is first order in h (docs/animate.md).
+ * K = df_c/dx at the current iterate and Kc the clamp of compressed
+ * springs (model.h), is factored by CHOLMOD (linsol_schur.h) and kept
+ * while the corrections shrink fast and take full steps, refactored
+ * otherwise; where bending or shear make S indefinite, S + mu M (a
+ * Levenberg-Marquardt shift, kept from step to step) so the direction is
+ * one of descent and the factor a supernodal LL^T.  The iterations stop
+ * when a correction changes no edge length by more than DRAPE_ANIMATE_XTOL
+ * spacings.  The first iteration with a full step is the linearised
+ * backward Euler of Baraff & Witkin (1998); the line search is what makes
+ * a step safe when the linearisation overshoots (a stretch edge at the
+ * pins at a 33 ms step): Phi never increases, and nothing can fail to
+ * converge, since the step is taken after the iterations whatever their
+ * residual.  Then the energy guard: the state may not hold more kinetic +
+ * potential energy than the one before (the supports do no work); if it
+ * does, v is scaled down (be_step).  The error is first order in h
+ * (docs/animate.md).
  *
  * The step h is fixed (opts.fixed_step).  Only a step whose evaluation
  * reports a folded hinge or a non-finite value, or whose S cannot be
@@ -29,8 +38,8 @@
  * interval); an output point off the grid (an equilibrium check) splits
  * its grid step in two, so that every state reported is a state of the
  * one trajectory (no interpolation: the energy balance holds at every
- * output point) and the grid is kept.  Nothing is allocated after alloc except CHOLMOD's first
- * factorisation (linsol_schur.h).
+ * output point) and the grid is kept.  Nothing is allocated after alloc
+ * except CHOLMOD's first factorisation (linsol_schur.h).
  */
 #include <math.h>
 #include <string.h>
@@ -41,13 +50,12 @@
 
 /* A step that fails is halved at most this often (h / 2^10). */
 #define DRAPE_ANIMATE_MAX_HALVINGS 10
-/* Newton iterations per step, one factorisation, at most; fewer once a
- * correction moves no particle by more than XTOL spacings
- * (docs/animate.md). */
+/* Newton iterations per step at most; fewer once a correction changes no
+ * edge length by more than XTOL spacings (docs/animate.md). */
 #ifndef DRAPE_ANIMATE_NEWTON_MAX
 #define DRAPE_ANIMATE_NEWTON_MAX 6
 #endif
-#ifndef DRAPE_ANIMATE_REFRESH /* refactor every this many iterations; 0 never */
+#ifndef DRAPE_ANIMATE_REFRESH /* refactor every this many iterations; 0 = adaptive */
 #define DRAPE_ANIMATE_REFRESH 0
 #endif
 #ifndef DRAPE_ANIMATE_PREDICT
@@ -93,7 +101,7 @@ typedef struct anim {
     drape_schur *schur;
     long steps, halvings, factors, failed_factors, newton, backtracks;
     long rescales;        /* steps whose velocities were scaled down */
-    int refresh;          /* refactor every this many Newton iterations; 0 never */
+    int refresh;          /* refactor every this many Newton iterations; 0 = adaptive */
     double *vlast;        /* nf3: v at the start of the last step */
     double h_last;        /* its size; 0 = none (restart) */
     double mu_last;       /* the shift of the last factorisation */
