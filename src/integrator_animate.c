@@ -243,6 +243,20 @@ static void scatter_xv(anim *s, const double *xn, const double *v, double h)
     }
 }
 
+/* out = D_n v (free coordinates): the diagonal alone for air drag (D =
+ * -c M), else the sparse product over the model pattern. */
+static void d_times(const anim *s, const double *v, double *out)
+{
+    const drape_pattern *P = drape_model_pattern(s->ode->model);
+    if (s->d_const) {
+        for (long i = 0; i < s->nf3; i++) out[i] = s->D[s->dpos[i]] * v[i];
+        return;
+    }
+    memset(out, 0, sizeof(double) * (size_t)s->nf3);
+    for (int64_t j = 0; j < P->n; j++)
+        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++) out[P->rowind[k]] += s->D[k] * v[j];
+}
+
 /* Phi(v) (at x_n + h v, scattered here); 1 if the energy cannot be
  * evaluated (folded hinge) or is not finite. */
 static int phi(anim *s, const double *xn, const double *v, double h, double *out)
@@ -257,13 +271,10 @@ static int phi(anim *s, const double *xn, const double *v, double h, double *out
         double d = v[i] - s->vn[i];
         kin += d * d / im[i / 3];
     }
-    /* v^T D_n v through the Schur solver's product: z = [v2; M^-1 D v]
-     * (w, not r: v may be r, the line search's trial) */
-    memset(s->w, 0, sizeof(double) * (size_t)s->nf3);
-    memcpy(s->w + s->nf3, v, sizeof(double) * (size_t)s->nf3);
+    /* v^T D_n v (into w, not r: v may be r, the line search's trial) */
     if (s->have_d) {
-        drape_schur_jtimes(s->schur, s->K, s->D, s->w, s->z);
-        for (long i = 0; i < s->nf3; i++) damp += v[i] * s->z[s->nf3 + i] / im[i / 3];
+        d_times(s, v, s->w);
+        for (long i = 0; i < s->nf3; i++) damp += v[i] * s->w[i];
     }
     double p = 0.5 * kin + E.stretch + E.bend + E.shear + E.gravity - 0.5 * h * damp;
     if (!isfinite(p)) return 1;
@@ -300,10 +311,8 @@ static int phi_grad(anim *s, const double *xn, const double *v, double h)
     if (rc != 0) return rc;
     for (long i = 0; i < s->nf3; i++) s->g[i] = (v[i] - s->vn[i]) / im[i / 3] - h * s->z[s->nf3 + i] / im[i / 3];
     if (s->have_d) {
-        memset(s->w, 0, sizeof(double) * (size_t)s->nf3);
-        memcpy(s->w + s->nf3, v, sizeof(double) * (size_t)s->nf3);
-        drape_schur_jtimes(s->schur, s->K, s->D, s->w, s->z);
-        for (long i = 0; i < s->nf3; i++) s->g[i] -= h * s->z[s->nf3 + i] / im[i / 3];
+        d_times(s, v, s->w);
+        for (long i = 0; i < s->nf3; i++) s->g[i] -= h * s->w[i];
     }
     for (long i = 0; i < s->nf3; i++)
         if (!isfinite(s->g[i])) return 1;
