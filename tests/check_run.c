@@ -621,6 +621,32 @@ START_TEST(test_max_order)
 }
 END_TEST
 
+/* An interrupted animate run (issue 16) resumes with its own step, the one
+ * its --substeps gave (stored in the checkpoint), not the scene's. */
+START_TEST(test_animate_resume)
+{
+    const char *scene = ir_scene();
+    char dir[600], wait_for[700];
+    snprintf(dir, sizeof dir, "%s/interrupted-animate", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/frame_000000.obj", dir);
+    const char *a1[] = {"run", "-q", scene, "--method", "animate", "--substeps", "50",
+                        "--out", dir, NULL};
+    int code = run_and_signal(wait_for, SIGTERM, a1);
+    ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
+    char resume[700];
+    snprintf(resume, sizeof resume, "run --resume '%s'", dir);
+    code = tu_run_drape(resume, out, CAP, err, CAP);
+    ck_assert_msg(code == 0, "exit %d, stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"t_max\""), "%s", out);
+    ck_assert_msg(strstr(out, "\"integrator\": \"animate\""), "%s", out);
+    ck_assert_double_eq(json_num(out, "substeps"), 50.0);
+    ck_assert_double_eq_tol(json_num(out, "step_s"), 0.05 / 50, 1e-12);
+    /* the two parts together: every step of 0.05 / 50 s to t_max */
+    ck_assert_msg(json_num(out, "steps") >= IR_T_MAX / (0.05 / 50) - 0.5, "%s", out);
+}
+END_TEST
+
 /* --resume refuses what it cannot continue, with the documented statuses. */
 START_TEST(test_resume_refusals)
 {
@@ -752,6 +778,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_interrupt_and_resume);
     tcase_add_test(tc, test_resume_refusals);
     tcase_add_test(tc, test_max_order);
+    tcase_add_test(tc, test_animate_resume);
     tcase_add_test(tc, test_strain_limit_stops_run);
     tcase_add_test(tc, test_bad_corpus_run);
     suite_add_tcase(s, tc);
