@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "cli_bench.h"
+#include "cli_io.h"
 #include "drape/alloc.h"
 #include "drape/drape.h"
 #include "drape/sim.h"
@@ -232,31 +233,23 @@ static int read_until(int fd, void *buf, size_t n, double deadline)
 int drape_cli_bench_point(const bench *b, const char *integrator, double rtol, double limit,
                      double *xs, double *v, bench_point *p, drape_error *err)
 {
-    int fds[2];
-    if (pipe(fds) != 0)
-        return drape_error_set(err, DRAPE_E_IO, NULL, 0, 0, NULL, "pipe: %s", strerror(errno));
-    fflush(stdout);
-    fflush(stderr);
-    pid_t pid = fork();
-    if (pid < 0) {
-        close(fds[0]);
-        close(fds[1]);
-        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "fork: %s", strerror(errno));
-    }
+    int fd;
+    pid_t pid = drape_cli_fork_pipe(&fd);
+    if (pid < 0)
+        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "pipe or fork: %s",
+                               strerror(errno));
     if (pid == 0) {
-        close(fds[0]);
-        child_run(b, integrator, rtol, xs != NULL, fds[1]);
-        close(fds[1]);
+        child_run(b, integrator, rtol, xs != NULL, fd);
+        close(fd);
         _exit(0);
     }
-    close(fds[1]);
     double deadline = limit > 0 ? mono_now() + limit : 0.0;
-    int rr = read_until(fds[0], p, sizeof *p, deadline);
+    int rr = read_until(fd, p, sizeof *p, deadline);
     if (rr == 0 && p->status == PT_OK && xs) {
-        rr = read_until(fds[0], xs, sizeof(double) * b->n3 * (size_t)b->samples, deadline);
-        if (rr == 0) rr = read_until(fds[0], v, sizeof(double) * b->n3, deadline);
+        rr = read_until(fd, xs, sizeof(double) * b->n3 * (size_t)b->samples, deadline);
+        if (rr == 0) rr = read_until(fd, v, sizeof(double) * b->n3, deadline);
     }
-    close(fds[0]);
+    close(fd);
     if (rr == 1) kill(pid, SIGKILL);
     int wst = 0;
     while (waitpid(pid, &wst, 0) < 0 && errno == EINTR) {}

@@ -270,6 +270,30 @@ void drape_cli_csv_put(FILE *out, const char *s)
     fputc('"', out);
 }
 
+pid_t drape_cli_fork_pipe(int *fd)
+{
+    int fds[2];
+    if (pipe(fds) != 0) return -1;
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) {
+        int e = errno;
+        close(fds[0]);
+        close(fds[1]);
+        errno = e;
+        return -1;
+    }
+    if (pid == 0) {
+        close(fds[0]);
+        *fd = fds[1];
+        return 0;
+    }
+    close(fds[1]);
+    *fd = fds[0];
+    return pid;
+}
+
 int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err)
 {
     struct stat st;

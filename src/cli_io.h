@@ -6,8 +6,16 @@
 
 #include <stddef.h>
 #include <stdio.h>
+#include <sys/types.h>
 
 #include "drape/error.h"
+
+/* Fork a child that talks to the parent through a pipe (an ensemble's
+ * specimen, a benchmark point).  stdout and stderr are flushed first.
+ * Returns the child's pid in the parent, *fd the pipe's read end; 0 in
+ * the child, *fd the write end; -1 if pipe or fork failed (errno set,
+ * nothing left open). */
+pid_t drape_cli_fork_pipe(int *fd);
 
 /* Make directory DIR (one level) if it does not exist; an existing
  * non-directory is an E_IO error naming DIR and `--out`.  created may be

@@ -113,18 +113,10 @@ static void on_signal(int sig)
 
 static int launch(const run_args *a, child *c, unsigned long seed, const char *out_dir)
 {
-    int fds[2];
-    if (pipe(fds) != 0) return -1;
-    fflush(stdout);
-    fflush(stderr);
-    pid_t pid = fork();
-    if (pid < 0) {
-        close(fds[0]);
-        close(fds[1]);
-        return -1;
-    }
+    int fd;
+    pid_t pid = drape_cli_fork_pipe(&fd);
+    if (pid < 0) return -1;
     if (pid == 0) {
-        close(fds[0]);
         signal(SIGINT, SIG_DFL);
         signal(SIGTERM, SIG_DFL);
         char ctx[96];
@@ -141,7 +133,7 @@ static int launch(const run_args *a, child *c, unsigned long seed, const char *o
             snprintf(dir, sizeof dir, "%s/specimen-%03d", out_dir, c->k + 1);
             ca.out_dir = dir;
         }
-        FILE *o = fdopen(fds[1], "w");
+        FILE *o = fdopen(fd, "w");
         int st = 70;
         if (o) {
             run_child ch = {o};
@@ -151,9 +143,8 @@ static int launch(const run_args *a, child *c, unsigned long seed, const char *o
         fflush(stderr);
         _exit(st);
     }
-    close(fds[1]);
     c->pid = pid;
-    c->fd = fds[0];
+    c->fd = fd;
     return 0;
 }
 
