@@ -404,14 +404,7 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
         goto nomem;
     for (int p = 0; p < w->nf; p++)
         for (int c = 0; c < 3; c++) w->mrow[3 * p + c] = L->mass[L->free_to_id[p]];
-    for (long j = 0; j < w->N; j++) {
-        w->dpos[j] = -1;
-        for (int64_t k = w->pat->colptr[j]; k < w->pat->colptr[j + 1]; k++)
-            if (w->pat->rowind[k] == j) w->dpos[j] = (long)k;
-        if (w->dpos[j] < 0)
-            return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
-                                   "equilibrium: the model pattern lacks diagonal %ld", j);
-    }
+    drape_model_diagonal_slots(m, w->dpos);
     if (w->kclamp[0] > 0.0 || w->kclamp[1] > 0.0) { /* (E8): model.h */
         w->Kc = drape_malloc(sizeof(double) * nnz);
         if (!w->Kc) goto nomem;

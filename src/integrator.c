@@ -134,21 +134,6 @@ int drape_ode_jacobian(drape_ode *o, unsigned parts, int include_kinematic,
 
 /* ---- the handle ----------------------------------------------------------- */
 
-static double rest_extent(const drape_lattice *L)
-{
-    double ext = 0.0;
-    for (int c = 0; c < 3; c++) {
-        double lo = INFINITY, hi = -INFINITY;
-        for (int i = 0; i < L->n; i++) {
-            double q = L->x0[3 * i + c];
-            if (q < lo) lo = q;
-            if (q > hi) hi = q;
-        }
-        if (L->n > 0 && hi - lo > ext) ext = hi - lo;
-    }
-    return ext > 0.0 ? ext : L->sigma;
-}
-
 static void ode_release(drape_ode *o)
 {
     drape_free(o->atol);
@@ -188,7 +173,7 @@ static int ode_init(drape_ode *o, drape_model *m, const drape_integrator_opts *o
     memcpy(o->x, L->xinit, sizeof(double) * n3);
     o->stop = opt->stop;
     for (int k = 0; k < L->n_free; k++) o->inv_mass[k] = 1.0 / L->mass[L->free_to_id[k]];
-    double T = opt->t_scale > 0.0 ? opt->t_scale : sqrt(rest_extent(L) / DRAPE_G_STANDARD);
+    double T = opt->t_scale > 0.0 ? opt->t_scale : sqrt(drape_lattice_extent(L) / DRAPE_G_STANDARD);
     for (long i = 0; i < o->nf3; i++) {
         o->atol[i] = opt->atol;
         o->atol[o->nf3 + i] = opt->atol / T;

@@ -46,24 +46,16 @@
 
 #include "drape/alloc.h"
 #include "drape/integrator.h"
+#include "drape/lattice.h"
 #include "drape/linsol_schur.h"
+#include "drape/units.h"
 
 /* A step that fails is halved at most this often (h / 2^10). */
 #define DRAPE_ANIMATE_MAX_HALVINGS 10
 /* Newton iterations per step at most; fewer once a correction changes no
  * edge length by more than XTOL spacings (docs/animate.md). */
-#ifndef DRAPE_ANIMATE_NEWTON_MAX
 #define DRAPE_ANIMATE_NEWTON_MAX 6
-#endif
-#ifndef DRAPE_ANIMATE_REFRESH /* refactor every this many iterations; 0 = adaptive */
-#define DRAPE_ANIMATE_REFRESH 0
-#endif
-#ifndef DRAPE_ANIMATE_PREDICT
-#define DRAPE_ANIMATE_PREDICT 1
-#endif
-#ifndef DRAPE_ANIMATE_XTOL
 #define DRAPE_ANIMATE_XTOL 2e-3
-#endif
 /* Armijo constant and the smallest step fraction of the line search. */
 #define ANIM_ARMIJO 1e-4
 #define ANIM_ALPHA_MIN (1.0 / 1024.0)
@@ -75,10 +67,6 @@
 /* The shift mu M of an indefinite S: from ANIM_SHIFT_MIN by factors of 10. */
 #define ANIM_SHIFT_MIN 1e-2
 #define ANIM_SHIFT_MAX 1e4
-#ifndef ANIM_SHIFT_START
-#define ANIM_SHIFT_START 1.0
-#endif
-#define ANIM_SHIFT_START_MIN (ANIM_SHIFT_MIN / ANIM_SHIFT_START)
 
 #define PARTS_CONS (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY)
 #define PARTS_DAMP (DRAPE_PART_AIR | DRAPE_PART_EDGE)
@@ -90,7 +78,7 @@ typedef struct anim {
     double t_stop;        /* never step past it; 0 = none */
     long max_steps;       /* per step_to call */
     double t0;            /* start: the step grid is t0 + k h */
-    double t, t_prev;     /* current time and the start of the last step */
+    double t;             /* current time */
     double *y, *y_prev;   /* dim */
     double *r, *z, *w;    /* dim: right-hand sides and solutions; w: [0; v] */
     double *vn, *vt, *g, *dv; /* nf3: v_n, trial v, gradient of Phi, direction */
@@ -101,11 +89,9 @@ typedef struct anim {
     drape_schur *schur;
     long steps, halvings, factors, failed_factors, newton, backtracks;
     long rescales;        /* steps whose velocities were scaled down */
-    int refresh;          /* refactor every this many Newton iterations; 0 = adaptive */
     double *vlast;        /* nf3: v at the start of the last step */
     double h_last;        /* its size; 0 = none (restart) */
     double mu_last;       /* the shift of the last factorisation */
-    long shifts;          /* factorisations that needed the shift mu M */
     long *dpos;           /* nf3: the diagonal's slots in the pattern */
     double e_tot;         /* total energy (kinetic + potential) at y, J */
     int e_valid;          /* e_tot is that of the current y */
@@ -153,7 +139,7 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
     s->h = o->fixed_step;
     s->t_stop = o->t_stop;
     s->max_steps = o->max_steps > 0 ? o->max_steps : DRAPE_INTEGRATOR_MAX_STEPS_DEFAULT;
-    s->t = s->t_prev = s->t0 = t0;
+    s->t = s->t0 = t0;
     size_t dim = (size_t)s->dim, nnz = (size_t)(P->nnz ? P->nnz : 1);
     s->y = drape_malloc(sizeof(double) * dim);
     s->y_prev = drape_malloc(sizeof(double) * dim);
@@ -174,17 +160,7 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
     if (!s->y || !s->y_prev || !s->r || !s->K || !s->D || !s->Kc || !s->Kd || !s->z || !s->w ||
         !s->vn || !s->vt || !s->g || !s->dv || !s->dpos || !s->vlast)
         goto nomem;
-    for (long j = 0; j < s->nf3; j++) {
-        s->dpos[j] = -1;
-        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++)
-            if (P->rowind[k] == j) s->dpos[j] = (long)k;
-        if (s->dpos[j] < 0) {
-            anim_free(s);
-            drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
-                            "animate: the model pattern lacks diagonal %ld", j);
-            return NULL;
-        }
-    }
+    drape_model_diagonal_slots(ode->model, s->dpos);
     s->have_d = (ode->parts & (DRAPE_PART_AIR | DRAPE_PART_EDGE)) != 0;
     s->d_const = (ode->parts & DRAPE_PART_EDGE) == 0;
     s->schur = drape_schur_new(P, ode->inv_mass, err);
@@ -193,19 +169,11 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
         return NULL;
     }
     drape_schur_ldl_fallback(s->schur, 0);
-    s->refresh = DRAPE_ANIMATE_REFRESH;
     memcpy(s->y, y0, sizeof(double) * dim);
     memcpy(s->y_prev, y0, sizeof(double) * dim);
-    /* roundoff of the energy: relative 1e-12 of m g over the extent */
+    /* roundoff of the energy: relative 1e-12 of M g over the extent */
     const drape_lattice *L = ode->lattice;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < L->n; i++)
-        for (int c = 0; c < 3; c++) {
-            lo[c] = fmin(lo[c], L->xinit[3 * i + c]);
-            hi[c] = fmax(hi[c], L->xinit[3 * i + c]);
-        }
-    double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
-    s->e_tol = 1e-12 * L->mass_total * 9.80665 * (ext > 0.0 ? ext : L->sigma);
+    s->e_tol = 1e-12 * L->mass_total * DRAPE_G_STANDARD * drape_lattice_extent(L);
     return s;
 nomem:
     anim_free(s);
@@ -219,9 +187,9 @@ static int anim_reinit(void *st, double t0, const double *y0, drape_error *err)
     anim *s = st;
     memcpy(s->y, y0, sizeof(double) * (size_t)s->dim);
     memcpy(s->y_prev, y0, sizeof(double) * (size_t)s->dim);
-    s->t = s->t_prev = s->t0 = t0;
+    s->t = s->t0 = t0;
     s->steps = s->halvings = s->factors = s->failed_factors = s->newton = s->backtracks = 0;
-    s->rescales = s->shifts = 0;
+    s->rescales = 0;
     s->e_valid = 0;
     s->h_last = 0.0;
     s->mu_last = 0.0;
@@ -332,9 +300,9 @@ static int factor_at(anim *s, const double *xn, const double *v, double h, drape
     if (drape_model_jacobian(o->model, o->parts & PARTS_CONS, o->x, o->v, s->K, NULL) != 0) return 1;
     drape_model_compression_clamp(o->model, o->x, NULL, s->Kc);
     for (long k = 0; k < nnz; k++) s->K[k] += s->Kc[k];
-    /* start from a tenth of the last shift that was needed (a refused
-     * LL^T costs part of a factorisation) */
-    double mu = s->mu_last >= ANIM_SHIFT_START_MIN ? ANIM_SHIFT_START * s->mu_last : 0.0;
+    /* start from the last shift that was needed (a refused LL^T costs part
+     * of a factorisation; letting it decay made the 100 x 100 run slower) */
+    double mu = s->mu_last;
     if (mu > 0.0)
         for (long j = 0; j < n; j++) s->K[s->dpos[j]] -= mu / (h * h) / o->inv_mass[j / 3];
     for (;;) {
@@ -353,7 +321,6 @@ static int factor_at(anim *s, const double *xn, const double *v, double h, drape
             s->K[s->dpos[j]] -= (mu_next - mu) / (h * h) / o->inv_mass[j / 3];
         mu = mu_next;
     }
-    if (mu > 0.0) s->shifts++;
     s->mu_last = mu;
     s->factors++;
     return 0;
@@ -401,18 +368,7 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
         s->e_tot = ep + ek;
         s->e_valid = 1;
     }
-    /* Newton from v = v_n, or (DRAPE_ANIMATE_PREDICT) from the velocity
-     * extrapolated from the last step, v_n + (v_n - v_n-1) h / h_n-1,
-     * whichever has the lower Phi */
-    memcpy(v, s->vn, sizeof(double) * (size_t)n);
-    if (DRAPE_ANIMATE_PREDICT && s->h_last > 0.0) {
-        double q = h / s->h_last, pa, pb;
-        for (long i = 0; i < n; i++) s->dv[i] = s->vn[i] + q * (s->vn[i] - s->vlast[i]);
-        if (phi(s, xn, v, h, &pa) == 0 && phi(s, xn, s->dv, h, &pb) == 0 && pb < pa)
-            memcpy(v, s->dv, sizeof(double) * (size_t)n);
-    }
-    /* D_n at (x_n, v_n); K + Kc at the predictor x_n + h v_n */
-    /* (air drag alone: D = -c M, the same at every step) */
+    /* D_n at (x_n, v_n) (air drag alone: D = -c M, the same at every step) */
     if (s->have_d && !(s->d_const && s->d_valid)) {
         scatter_xv(s, xn, s->vn, 0.0);
         o->n_jac++;
@@ -420,15 +376,26 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
             return 1;
         s->d_valid = 1;
     }
-    int rc = factor_at(s, xn, v, h, err);
-    if (rc != 0) return rc;
+    /* Newton from v = v_n, or from the velocity extrapolated from the last
+     * step, v_n + (v_n - v_n-1) h / h_n-1, whichever has the lower Phi */
+    memcpy(v, s->vn, sizeof(double) * (size_t)n);
     double p0;
     if (phi(s, xn, v, h, &p0) != 0) return 1;
+    if (s->h_last > 0.0) {
+        double q = h / s->h_last, pb;
+        for (long i = 0; i < n; i++) s->dv[i] = s->vn[i] + q * (s->vn[i] - s->vlast[i]);
+        if (phi(s, xn, s->dv, h, &pb) == 0 && pb < p0) {
+            memcpy(v, s->dv, sizeof(double) * (size_t)n);
+            p0 = pb;
+        }
+    }
+    /* K + Kc at the starting iterate x_n + h v */
+    int rc = factor_at(s, xn, v, h, err);
+    if (rc != 0) return rc;
     int stale = 0; /* the last iteration converged slowly: refactor */
     double last_move = INFINITY;
     for (int it = 0; it < DRAPE_ANIMATE_NEWTON_MAX; it++) {
-        int refresh = s->refresh > 0 ? it > 0 && it % s->refresh == 0 : stale;
-        if (refresh && (rc = factor_at(s, xn, v, h, err)) != 0) return rc;
+        if (stale && (rc = factor_at(s, xn, v, h, err)) != 0) return rc;
         rc = phi_grad(s, xn, v, h);
         if (rc < 0)
             return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
@@ -445,8 +412,9 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
             slope += s->g[i] * s->dv[i];
             if (fabs(s->dv[i]) > dmax) dmax = fabs(s->dv[i]);
         }
-        if (!(slope < 0.0)) { /* not a descent direction (LDL^T of an
-                                 indefinite S): the mass-weighted gradient */
+        if (!(slope < 0.0)) { /* not a descent direction (roundoff; S, shifted
+                                 where needed, is positive definite): the
+                                 mass-weighted gradient */
             slope = 0.0;
             for (long i = 0; i < n; i++) {
                 s->dv[i] = -s->g[i] * o->inv_mass[i / 3];
@@ -467,8 +435,8 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
         if (alpha < ANIM_ALPHA_MIN) break; /* no decrease along dv: keep v */
         for (long i = 0; i < n; i++) v[i] += alpha * s->dv[i];
         p0 = p1;
-        /* adaptive refresh (refresh = 0): the frozen matrix is kept while
-         * the iteration contracts fast and takes full steps */
+        /* the frozen matrix is kept while the iteration contracts fast and
+         * takes full steps */
         double move = alpha * dmax;
         stale = alpha < 1.0 || move > ANIM_CONTRACTION * last_move;
         last_move = move;
@@ -480,11 +448,11 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
     /* No energy out of nothing: the supports do no work, so the total
      * energy may only fall.  Backward Euler can raise it where E is not
      * convex (compressed springs, buckling): -h^2/2 v^T H v > 0 for
-     * negative curvature H.  Then the step is cut back: v <- beta v
-     * (beta = 1/2, 1/4, ...) until the positions x_n + h v hold no more
-     * potential energy than the total there was (beta -> 0 gives x_n,
-     * which holds less), and the velocities are scaled down to the energy
-     * left: more dissipation, never less, and no step is refused. */
+     * negative curvature H.  Then the step is cut back: v <- beta v with
+     * the largest beta (bisection) for which the positions x_n + h v hold
+     * no more energy than the total there was (beta = 0 gives x_n, which
+     * holds less), and the velocities are scaled down to the energy left:
+     * more dissipation, never less, and no step is refused. */
     for (long i = 0; i < n; i++) {
         s->r[i] = xn[i] + h * v[i];
         if (!isfinite(s->r[i]) || !isfinite(v[i])) return 1;
@@ -546,7 +514,6 @@ static int anim_step(anim *s, double h, drape_error *err)
             return -1;
         }
         if (rc == 0) {
-            s->t_prev = s->t;
             s->t += h;
             s->steps++;
             return 0;

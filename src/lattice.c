@@ -638,6 +638,21 @@ static int bad_neighbour(const drape_lattice *L, int p, int q, int di, int dj)
     return fabs(sqrt(d2) - L->sigma) > 1e-9 * L->sigma;
 }
 
+double drape_lattice_extent(const drape_lattice *L)
+{
+    double ext = 0.0;
+    for (int c = 0; c < 3; c++) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (int i = 0; i < L->n; i++) {
+            double q = L->x0[3 * i + c];
+            if (q < lo) lo = q;
+            if (q > hi) hi = q;
+        }
+        if (L->n > 0 && hi - lo > ext) ext = hi - lo;
+    }
+    return ext > 0.0 ? ext : L->sigma;
+}
+
 int drape_lattice_check(const drape_lattice *L)
 {
     int bad = 0;

@@ -365,6 +365,13 @@ static int check_lattice(const drape_lattice *L)
     return 0;
 }
 
+void drape_model_diagonal_slots(const drape_model *m, long *slots)
+{
+    for (int q = 0; q < m->nf; q++)
+        for (int c = 0; c < 3; c++)
+            slots[3 * q + c] = (long)(m->dslot[q] + c * m->colstride[q] + c);
+}
+
 drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
                              const drape_model_opts *o, drape_error *err)
 {

@@ -739,6 +739,18 @@ START_TEST(test_pattern)
     ck_assert_uint_eq(drape_model_parts(ma), CONS_G | DRAPE_PART_AIR);
     ck_assert_uint_eq(drape_model_parts(me), DRAPE_PART_ALL);
     ck_assert_ptr_eq(drape_model_lattice(ma), L);
+    /* the diagonal slots: in column j, at row j, for both patterns */
+    long slots[3 * 30];
+    ck_assert(3 * nf <= 3 * 30);
+    drape_model *mm[2] = {ms, ma};
+    for (int q = 0; q < 2; q++) {
+        const drape_pattern *P = drape_model_pattern(mm[q]);
+        drape_model_diagonal_slots(mm[q], slots);
+        for (int64_t j = 0; j < 3 * nf; j++) {
+            ck_assert(slots[j] >= P->colptr[j] && slots[j] < P->colptr[j + 1]);
+            ck_assert_int_eq(P->rowind[slots[j]], j);
+        }
+    }
     drape_model_free(ms);
     drape_model_free(ma);
     drape_model_free(me);

@@ -89,6 +89,10 @@ void drape_lattice_free(drape_lattice *L);
 int drape_lattice_estimate(const drape_scene *s, long *ni, long *nj,
                            long *n_particles);
 
+/* Largest extent of the rest lattice (x0) along x, y or z, m; sigma for a
+ * single particle.  The length scale of tolerances and energy checks. */
+double drape_lattice_extent(const drape_lattice *L);
+
 /* Number of violated invariants (ids in range, neighbours at distance
  * sigma in the rest state, weights in (0, 1], masses > 0, free ids
  * consistent, ...); 0 means consistent. */

@@ -93,6 +93,11 @@ int drape_model_forces(drape_model *m, unsigned parts, const double *x,
  * union of all built parts, diagonal included). */
 const drape_pattern *drape_model_pattern(const drape_model *m);
 
+/* slots[j] = position of the diagonal entry (j, j) among the values of
+ * drape_model_pattern, for the 3 n_free coordinates j (the pattern always
+ * holds the diagonal). */
+void drape_model_diagonal_slots(const drape_model *m, long *slots);
+
 /* Values of K and D (each nnz of drape_model_pattern, overwritten) for the
  * selected parts at (x, v).  D may be NULL.  Returns 0 or 1. */
 int drape_model_jacobian(drape_model *m, unsigned parts, const double *x,
