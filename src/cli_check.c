@@ -36,14 +36,26 @@ static void print_fabric(const drape_fabric *f)
         printf("  %s: bending_rigidity_Nm %.6g, bending_length_m (B/Wg)^(1/3) %.6g\n",
                dn[d], B, cbrt(B / (f->weight * g)));
     }
+    if (f->has_bias) {
+        double B = drape_fit_slope(&f->bend_bias, 0.0);
+        double Bs = 0.25 * (drape_fabric_bending_rigidity(f, DRAPE_WARP) +
+                            drape_fabric_bending_rigidity(f, DRAPE_WEFT));
+        printf("  bias: bending_rigidity_Nm %.6g, bending_length_m (B/Wg)^(1/3) %.6g; "
+               "twist rigidity D66 = B_bias - (B_warp + B_weft)/4 = %.6g N.m\n",
+               B, cbrt(B / (f->weight * g)), B - Bs);
+    }
     printf("  shear_rigidity_N_m_rad %.6g (mean of warp and weft)\n",
            drape_fabric_shear_rigidity(f));
-    printf("  bending M(K):   K_1/m      M_warp_N      M_weft_N   (N.m/m = N)\n");
+    printf("  bending M(K):   K_1/m      M_warp_N      M_weft_N%s   (N.m/m = N)\n",
+           f->has_bias ? "      M_bias_N" : "");
     const double Ks[] = {0.0, 10.0, 40.0, 100.0, 250.0, 500.0};
-    for (size_t i = 0; i < sizeof Ks / sizeof Ks[0]; i++)
-        printf("                %7.1f  %12.5e  %12.5e\n", Ks[i],
+    for (size_t i = 0; i < sizeof Ks / sizeof Ks[0]; i++) {
+        printf("                %7.1f  %12.5e  %12.5e", Ks[i],
                drape_fit_value(&f->bend[DRAPE_WARP], Ks[i]),
                drape_fit_value(&f->bend[DRAPE_WEFT], Ks[i]));
+        if (f->has_bias) printf("  %12.5e", drape_fit_value(&f->bend_bias, Ks[i]));
+        putchar('\n');
+    }
     printf("  shear F(gamma): gamma_rad  F_warp_N_m    F_weft_N_m    F_mean_N_m\n");
     const double gs[] = {0.0, 0.005, 0.00873, 0.05, 0.13, 0.3};
     for (size_t i = 0; i < sizeof gs / sizeof gs[0]; i++)

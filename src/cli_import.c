@@ -480,10 +480,10 @@ static void arcsim_write(FILE *f, const char *name, const char *path, const arcs
           "#                       weft bent), linear in K between K = 0,10,20,30,40 1/m,\n"
           "#                       constant beyond 40 1/m (ARCSim clamps). Each piece is\n"
           "#                       [0, (ke_i - s_i K_i)/4, s_i/4], s_i = dke/dK on it.\n"
+          "#                       bias: the same through row 1 (hinges at 45 degrees)\n"
           "#   The pieces meet in value but not in slope: loading this file\n"
           "#   warns about slope jumps at the knots.\n", f);
-    static const char *const rowname[3] = {"warp (row 0)", "bias (row 1, not used: the lattice has no bias hinge)",
-                                           "weft (row 2)"};
+    static const char *const rowname[3] = {"warp (row 0)", "bias (row 1)", "weft (row 2)"};
     fputs("# Table rows (N.m):\n", f);
     for (int r = 0; r < 3; r++) {
         fprintf(f, "#   %s:", rowname[r]);
@@ -494,11 +494,13 @@ static void arcsim_write(FILE *f, const char *name, const char *path, const arcs
         }
         fputc('\n', f);
     }
-    if (arcsim_softening(NULL, "", m->bend[0]) || arcsim_softening(NULL, "", m->bend[2])) {
+    if (arcsim_softening(NULL, "", m->bend[0]) || arcsim_softening(NULL, "", m->bend[1]) ||
+        arcsim_softening(NULL, "", m->bend[2])) {
         fputs("# Caution: the measured table softens at large curvature, so the moment\n"
               "# falls with curvature over part of the range (negative tangent stiffness):\n", f);
         arcsim_softening(f, "warp", m->bend[0]);
         arcsim_softening(f, "weft", m->bend[2]);
+        arcsim_softening(f, "bias", m->bend[1]);
     }
     fprintf(f, "fabric: %s\n", name);
     fputs("description: ", f);
@@ -514,9 +516,10 @@ static void arcsim_write(FILE *f, const char *name, const char *path, const arcs
              "src/conf.cpp, dde.cpp, physics.cpp. weight = density; u = weft, v = warp "
              "(assumed); k_weft = 2*stretching[0][0], k_warp = 2*stretching[0][2]; shear "
              "F = G*gamma, G = stretching[0][3]; bending M(K) = K*ke(K)/4 through "
-             "bending[0] (warp) and bending[2] (weft) at K = 0,10,20,30,40 1/m, constant "
-             "beyond. Assumed: the u/v to weft/warp mapping, the factor 1/4, dropped "
-             "Poisson coupling stretching[0][1] and the nonlinear rows 1-5. See "
+             "bending[0] (warp), bending[1] (bias) and bending[2] (weft) at K = "
+             "0,10,20,30,40 1/m, constant beyond. Assumed: the u/v to weft/warp mapping, "
+             "the factor 1/4, dropped Poisson coupling stretching[0][1] and the nonlinear "
+             "rows 1-5. See "
              "docs/fabric-library.md.", file);
     put_quoted(f, d);
     fprintf(f, "\nweight: %s kg/m^2\n", w);
@@ -527,6 +530,16 @@ static void arcsim_write(FILE *f, const char *name, const char *path, const arcs
     arcsim_write_fit(f, m->bend[0]);
     fputs("  weft:   # bending[2]: hinges along v, weft yarns bent; factor 1/4 assumed\n", f);
     arcsim_write_fit(f, m->bend[2]);
+    /* the model's bias term (issue 18) needs B_bias >= (B_warp + B_weft) / 4 */
+    if (m->bend[1][0] >= 0.25 * (m->bend[0][0] + m->bend[2][0])) {
+        fputs("  bias:   # bending[1]: hinges at 45 degrees, a strip cut on the bias; factor "
+              "1/4 assumed\n", f);
+        arcsim_write_fit(f, m->bend[1]);
+    } else {
+        fputs("  # bias: left out: bending[1][0] is below (bending[0][0] + bending[2][0]) / 4,\n"
+              "  # softer than the warp and weft hinges alone make a strip cut at 45 degrees\n"
+              "  # (drape's bias term adds a twist rigidity, which cannot be negative)\n", f);
+    }
     fputs("shear:\n  units: {angle: rad, force: N/m}\n", f);
     fprintf(f, "  warp:   # G = stretching[0][3]; ARCSim has one shear term for both directions\n"
                "    - {from: 0, poly: [0, %s]}\n  weft:\n    - {from: 0, poly: [0, %s]}\n", G, G);

@@ -123,6 +123,11 @@ static const char run_usage[] =
     "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
     "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
     "  --seed N                 perturbation seed (of the first specimen)\n"
+    "  --terms LIST             energy terms, comma-separated: stretch, bend, shear,\n"
+    "                           gravity, bias (scene: model.terms; default all;\n"
+    "                           bias, the twist that makes a fabric's measured bias\n"
+    "                           curve, acts only where the fabric gives one:\n"
+    "                           docs/model.md, \"Bias bending\")\n"
     "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR;\n"
     "                           with N > 1 specimens DIR/specimen-001/...; Cusick\n"
     "                           and table scenes: DIR/shadow.svg, the top view of\n"
@@ -165,7 +170,10 @@ const char *const drape_cli_run_keys[] = {
     "specimens_failed", "seed", "fall_time_s", "fall_step_s",
     /* issue 16: the animate method's step; the energy balance of dynamic runs */
     "step_s", "substeps", "energy_total_start_J", "energy_total_end_J",
-    "energy_max_rise_J", "max_strain_peak", "energy_rescales", NULL};
+    "energy_max_rise_J", "max_strain_peak", "energy_rescales",
+    /* issue 18: the energy terms the model was built with, joined by `+`
+     * (bias only where the fabric gives a bias curve) */
+    "terms", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -454,6 +462,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_time > 0) s.fall_time = ra->fall_time;
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
     if (ra->substeps > 0) s.substeps = ra->substeps;
+    if (ra->terms) s.terms = ra->terms;
     if (ri && ri->fixed_step > 0.0) { /* animate's step (its --substeps) */
         double frame;
         drape_scene_animate_step(&s, &frame, NULL);
@@ -674,6 +683,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         drape_cli_result_num(&r, "max_strain_peak", bal ? rc.strain_peak : NAN);
         drape_cli_result_int(&r, "energy_rescales", animate ? res.stats.energy_rescales : NAN);
     }
+    char terms[96] = "";
+    for (int k = 0; drape_term_names[k]; k++) {
+        unsigned bit = 1u << k;
+        if (!(s.terms & bit) || (bit == DRAPE_TERM_BIAS && L->n_cells == 0)) continue;
+        size_t len = strlen(terms);
+        snprintf(terms + len, sizeof terms - len, "%s%s", len ? "+" : "", drape_term_names[k]);
+    }
+    drape_cli_result_str(&r, "terms", terms);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");
@@ -796,7 +813,8 @@ int drape_cli_run(int argc, char **argv)
 {
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
-           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS };
+           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
+           O_TERMS };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -815,6 +833,7 @@ int drape_cli_run(int argc, char **argv)
         {"specimens", required_argument, NULL, O_SPECIMENS},
         {"jobs", required_argument, NULL, 'j'},
         {"seed", required_argument, NULL, O_SEED},
+        {"terms", required_argument, NULL, O_TERMS},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"substeps", required_argument, NULL, O_SUBSTEPS},
@@ -889,6 +908,24 @@ int drape_cli_run(int argc, char **argv)
                 return usage_error("--seed: expected a non-negative integer, got `%s'%s", optarg, "");
             ra.has_seed = 1;
             ra.seed = v;
+            break;
+        }
+        case O_TERMS: {
+            ra.terms = 0;
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", optarg);
+            for (char *save = NULL, *t = strtok_r(buf, ",", &save); t;
+                 t = strtok_r(NULL, ",", &save)) {
+                int k = 0;
+                while (drape_term_names[k] && strcmp(drape_term_names[k], t) != 0) k++;
+                if (!drape_term_names[k])
+                    return usage_error("--terms: unknown term `%s' (expected a comma-separated "
+                                       "list of stretch, bend, shear, gravity, bias)%s", t, "");
+                ra.terms |= 1u << k;
+            }
+            if (!ra.terms)
+                return usage_error("--terms: expected a comma-separated list of terms, got `%s'%s",
+                                   optarg, "");
             break;
         }
         case O_SUBSTEPS:

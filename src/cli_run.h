@@ -24,6 +24,7 @@ typedef struct run_args {
     unsigned long seed;       /* --seed: perturbation.seed */
     double fall_time, fall_step; /* s */
     int substeps;             /* --substeps (animate); 0 = the scene's */
+    unsigned terms;           /* --terms: DRAPE_TERM_* mask; 0 = the scene's */
     int specimens;            /* --specimens; 0 = the scene's */
     int jobs;                 /* -j: processes at once; 0 = one per core */
     int no_warnings;          /* the loaders' warnings are not printed (an

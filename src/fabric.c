@@ -450,12 +450,52 @@ static int get_units_block(loader *L, const drape_ynode *map, const char *path,
     return 0;
 }
 
+/* The bias curve must be at least as stiff as the warp and weft hinges
+ * alone make a 45-degree strip, B_bias >= (B_warp + B_weft) / 4 (the
+ * twist rigidity B_bias - (B_warp + B_weft) / 4 is not negative), and the
+ * twist energy it implies should be convex: checked on a grid of twist
+ * curvatures up to twice the last knot (or 100 1/m). */
+static int check_bias(loader *L, const drape_ynode *b, const drape_fabric *f)
+{
+    double Bb = drape_fit_slope(&f->bend_bias, 0.0);
+    double Bs = 0.25 * (drape_fit_slope(&f->bend[DRAPE_WARP], 0.0) +
+                        drape_fit_slope(&f->bend[DRAPE_WEFT], 0.0));
+    if (!(Bb >= Bs)) {
+        fail(L, b, "bending.bias", DRAPE_E_INPUT,
+             "the bias rigidity %g N.m is below (B_warp + B_weft) / 4 = %g N.m, what "
+             "the warp and weft hinges alone give a strip cut at 45 degrees: the "
+             "twist rigidity would be negative", Bb, Bs);
+        return -1;
+    }
+    double tmax = 100.0;
+    const drape_fit *fs[3] = {&f->bend_bias, &f->bend[DRAPE_WARP], &f->bend[DRAPE_WEFT]};
+    for (int k = 0; k < 3; k++) {
+        const drape_fit *fk = fs[k];
+        double last = fk->n > 1 ? fk->p[fk->n - 1].from : 0.0;
+        if (2.0 * last > tmax) tmax = 2.0 * last;
+    }
+    double worst = 0.0, at = 0.0, scale = 4.0 * Bb;
+    for (int i = 1; i <= 2000; i++) {
+        double t = tmax * i / 2000.0, d2;
+        drape_fabric_twist_energy(f, t, NULL, &d2);
+        if (d2 < worst) { worst = d2; at = t; }
+    }
+    if (worst < -1e-9 * scale)
+        warn_at(L, b, "bending.bias",
+                      "the twist energy implied by the bias, warp and weft curves is not "
+                      "convex: its stiffness Wt'' = 4 M_bias'(2 tau) - M_warp'(tau) - "
+                      "M_weft'(tau) reaches %.3g N.m at tau = %.3g 1/m (negative: the "
+                      "bias curve softens faster than the warp and weft curves)",
+                      worst, at);
+    return 0;
+}
+
 static int get_bending(loader *L, const drape_ynode *bn, drape_fabric *f)
 {
-    static const char *const keys[] = {"units", "warp", "weft", NULL};
+    static const char *const keys[] = {"units", "warp", "weft", "bias", NULL};
     fit_units u;
     if (need_type(L, bn, "bending", DRAPE_YNODE_MAPPING,
-                  "a mapping {units, warp, weft}"))
+                  "a mapping {units, warp, weft[, bias]}"))
         return -1;
     if (drape_ynode_check_keys(L->doc, bn, "bending", keys, L->err)) return -1;
     if (get_units_block(L, bn, "bending", "curvature", DRAPE_DIM_CURVATURE,
@@ -470,6 +510,13 @@ static int get_bending(loader *L, const drape_ynode *bn, drape_fabric *f)
     if (!t || get_fit(L, t, "bending.weft", &u, "bending moment",
                       &f->bend[DRAPE_WEFT]))
         return -1;
+    const drape_ynode *b = drape_ynode_get(bn, "bias", NULL);
+    if (b) {
+        if (get_fit(L, b, "bending.bias", &u, "bending moment", &f->bend_bias))
+            return -1;
+        f->has_bias = 1;
+        return check_bias(L, b, f);
+    }
     return 0;
 }
 
@@ -789,4 +836,25 @@ double drape_fabric_bending_rigidity(const drape_fabric *f, drape_dir d)
 double drape_fabric_shear_rigidity(const drape_fabric *f)
 {
     return drape_fit_slope(&f->shear_mean, 0.0);
+}
+
+double drape_fabric_twist_energy(const drape_fabric *f, double tau, double *d1,
+                                 double *d2)
+{
+    if (!f->has_bias) {
+        if (d1) *d1 = 0.0;
+        if (d2) *d2 = 0.0;
+        return 0.0;
+    }
+    double sg = tau < 0.0 ? -1.0 : 1.0, t = fabs(tau);
+    const drape_fit *bb = &f->bend_bias, *bw = &f->bend[DRAPE_WARP],
+                    *bf = &f->bend[DRAPE_WEFT];
+    if (d1)
+        *d1 = sg * (2.0 * drape_fit_value(bb, 2.0 * t) - drape_fit_value(bw, t) -
+                    drape_fit_value(bf, t));
+    if (d2)
+        *d2 = 4.0 * drape_fit_slope(bb, 2.0 * t) - drape_fit_slope(bw, t) -
+              drape_fit_slope(bf, t);
+    return drape_fit_integral(bb, 2.0 * t) - drape_fit_integral(bw, t) -
+           drape_fit_integral(bf, t);
 }

@@ -26,6 +26,9 @@
  *              the tip drop first-order wrong (docs/lattice.md);     (L3)
  *       corner w_c = A(Q_c & S) / (sigma^2 / 4), Q_c the sigma/2 x sigma/2
  *              quarter cell between mid and its two neighbours;       (L4)
+ *       cell   w_q = A(Q & S) / sigma^2, Q the square (i, j)-(i+1, j+1)
+ *              whose four corners are particles; built only with the
+ *              bias term and a fabric with a bias curve (issue 18);   (L5)
  *   - the fixed set (clamps of each scene kind, pins) and free numbering;
  *   - the optional perturbation z += a * U(-1, 1) of free particles, from
  *     splitmix64 (Steele, Lea & Flood 2014, "Fast splittable pseudorandom
@@ -389,12 +392,12 @@ static double uniform_pm1(uint64_t *state)
 /* Elements (L2-L4).  With fill = 0 only counts; with fill = 1 stores into
  * the arrays (already sized by the counting pass). */
 static void build_elements(drape_lattice *L, const geom *g,
-                           const drape_scene *s, int fill)
+                           const drape_scene *s, int want_cells, int fill)
 {
     int want_edges = (s->terms & DRAPE_TERM_STRETCH) || s->damping_edge > 0.0;
     int want_hinges = (s->terms & DRAPE_TERM_BEND) != 0;
     int want_corners = (s->terms & DRAPE_TERM_SHEAR) != 0;
-    int ne = 0, nh = 0, nc = 0;
+    int ne = 0, nh = 0, nc = 0, nq = 0;
     /* direction d: DRAPE_WEFT steps i, DRAPE_WARP steps j */
     static const int step[2][2] = {{1, 0}, {0, 1}};
     static const int quad[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
@@ -451,10 +454,24 @@ static void build_elements(drape_lattice *L, const geom *g,
             }
             nc++;
         }
+        if (want_cells) { /* (L5) the square (i, j)-(i+1, j+1) */
+            int q[4] = {p, grid_at(L, i + 1, j), grid_at(L, i + 1, j + 1),
+                        grid_at(L, i, j + 1)};
+            if (q[1] < 0 || q[2] < 0 || q[3] < 0) continue;
+            if (L->fixed[q[0]] && L->fixed[q[1]] && L->fixed[q[2]] && L->fixed[q[3]])
+                continue;
+            if (fill) {
+                drape_cell *k = &L->cells[nq];
+                memcpy(k->p, q, sizeof q);
+                k->weight = frac(spec_area(g, i, i + 1.0, j, j + 1.0), 1.0);
+            }
+            nq++;
+        }
     }
     L->n_edges = ne;
     L->n_hinges = nh;
     L->n_corners = nc;
+    L->n_cells = nq;
 }
 
 static double nominal_area(const drape_scene *s)
@@ -553,8 +570,12 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
                                        * uniform_pm1(&state);
     }
 
-    /* elements: count, allocate, fill */
-    build_elements(L, &g, s, 0);
+    /* elements: count, allocate, fill.  Twist cells only where the bias
+     * term is asked for (by default it is), with bend, and the fabric
+     * gives a bias curve: without one, `bias` leaves the seed's model */
+    int want_cells = (s->terms & DRAPE_TERM_BIAS) && (s->terms & DRAPE_TERM_BEND) &&
+                     f->has_bias;
+    build_elements(L, &g, s, want_cells, 0);
     if (L->n_edges > 0) {
         L->edges = drape_calloc((size_t)L->n_edges, sizeof *L->edges);
         if (!L->edges) goto nomem;
@@ -567,7 +588,11 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
         L->corners = drape_calloc((size_t)L->n_corners, sizeof *L->corners);
         if (!L->corners) goto nomem;
     }
-    build_elements(L, &g, s, 1);
+    if (L->n_cells > 0) {
+        L->cells = drape_calloc((size_t)L->n_cells, sizeof *L->cells);
+        if (!L->cells) goto nomem;
+    }
+    build_elements(L, &g, s, want_cells, 1);
     rc = 0;
     goto out;
 
@@ -597,6 +622,7 @@ void drape_lattice_free(drape_lattice *L)
     drape_free(L->edges);
     drape_free(L->hinges);
     drape_free(L->corners);
+    drape_free(L->cells);
     drape_free(L);
 }
 
@@ -746,6 +772,22 @@ int drape_lattice_check(const drape_lattice *L)
         }
         if (bad_weight(C->weight)) bad++;
         if (L->fixed[C->mid] && L->fixed[C->warp] && L->fixed[C->weft]) bad++;
+    }
+    if (L->n_cells < 0 || (L->n_cells && !L->cells)) return bad + 1;
+    for (int c = 0; c < L->n_cells; c++) {
+        const drape_cell *Q = &L->cells[c];
+        int nfix = 0;
+        if (bad_id(L, Q->p[0]) || bad_id(L, Q->p[1]) || bad_id(L, Q->p[2]) ||
+            bad_id(L, Q->p[3])) {
+            bad++;
+            continue;
+        }
+        if (bad_neighbour(L, Q->p[0], Q->p[1], 1, 0) || bad_neighbour(L, Q->p[1], Q->p[2], 0, 1) ||
+            bad_neighbour(L, Q->p[3], Q->p[2], 1, 0) || bad_neighbour(L, Q->p[0], Q->p[3], 0, 1))
+            bad++;
+        if (bad_weight(Q->weight)) bad++;
+        for (int k = 0; k < 4; k++) nfix += L->fixed[Q->p[k]];
+        if (nfix == 4) bad++;
     }
     return bad;
 }

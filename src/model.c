@@ -394,6 +394,155 @@ static int kern_shear(const drape_model *m, const drape_corner *cn,
     return 0;
 }
 
+/* Twist cell (issue 18; docs/model.md, "Bias bending").  With the cell's
+ * corners P0 = (i, j), P1 = (i+1, j), P2 = (i+1, j+1), P3 = (i, j+1):
+ *     a  = P0 - P1 + P2 - P3   (its non-planarity: sigma^2 * 2 x_xy for a
+ *                               surface x(u, v); zero for any cylinder
+ *                               whose axis is along a lattice direction)
+ *     e1 = P2 - P0, e2 = P3 - P1 (the diagonals), c = e1 x e2,
+ *     r  = a . c / g,  g = sqrt(c . c + eps^2)   (r = a . n, n the unit
+ *                               normal; eps = 1e-6 sigma^2 keeps r smooth
+ *                               where the diagonals become parallel)
+ *     tau = r / sigma^2 (the twist curvature kappa_xy), E = w sigma^2 Wt(tau).
+ * z = (a, e1, e2) is linear in the 12 coordinates, with the coefficients
+ * below; gradient and Hessian are formed in z and mapped back. */
+static const double CELL_CZ[3][4] = {{1.0, -1.0, 1.0, -1.0},  /* a */
+                                     {-1.0, 0.0, 1.0, 0.0},   /* e1 */
+                                     {0.0, -1.0, 0.0, 1.0}};  /* e2 */
+
+/* M = [v]x, the matrix with M w = v x w. */
+static void skew3(const double *v, double sgn, double M[3][3])
+{
+    M[0][0] = 0.0;          M[0][1] = -sgn * v[2]; M[0][2] = sgn * v[1];
+    M[1][0] = sgn * v[2];   M[1][1] = 0.0;         M[1][2] = -sgn * v[0];
+    M[2][0] = -sgn * v[1];  M[2][1] = sgn * v[0];  M[2][2] = 0.0;
+}
+
+/* tau of the cell at x, and (if gz != NULL) the gradient of r in z (9),
+ * and (if Hz != NULL) its Hessian (9x9). */
+static double cell_twist(const drape_model *m, const drape_cell *q, const double *x,
+                         double gz[9], double Hz[9][9])
+{
+    double z[3][3], c[3];
+    const double *P[4];
+    double sg = m->L->sigma, eps = 1e-6 * sg * sg;
+    for (int k = 0; k < 4; k++) P[k] = x + 3 * (int64_t)q->p[k];
+    for (int u = 0; u < 3; u++)
+        for (int d = 0; d < 3; d++) {
+            double v = 0.0;
+            for (int k = 0; k < 4; k++) v += CELL_CZ[u][k] * P[k][d];
+            z[u][d] = v;
+        }
+    const double *a = z[0], *e1 = z[1], *e2 = z[2];
+    cross3(e1, e2, c);
+    double g = sqrt(dot3(c, c) + eps * eps), f = dot3(a, c), r = f / g;
+    if (!gz) return r / (sg * sg);
+    /* gradients of f and g in z */
+    double gf[9], gg[9], t[3];
+    for (int d = 0; d < 3; d++) gf[d] = c[d];
+    cross3(e2, a, t);
+    for (int d = 0; d < 3; d++) gf[3 + d] = t[d];
+    cross3(a, e1, t);
+    for (int d = 0; d < 3; d++) gf[6 + d] = t[d];
+    double ch[3] = {c[0] / g, c[1] / g, c[2] / g};
+    for (int d = 0; d < 3; d++) gg[d] = 0.0;
+    cross3(e2, ch, t); /* d|c|/de1 = e2 x c/g */
+    for (int d = 0; d < 3; d++) gg[3 + d] = t[d];
+    cross3(ch, e1, t); /* d|c|/de2 = c/g x e1 */
+    for (int d = 0; d < 3; d++) gg[6 + d] = t[d];
+    for (int k = 0; k < 9; k++) gz[k] = (gf[k] - r * gg[k]) / g;
+    if (!Hz) return r / (sg * sg);
+    /* Hessian of f (trilinear a . (e1 x e2)) */
+    double Hf[9][9], Hg[9][9], S[3][3];
+    memset(Hf, 0, sizeof Hf);
+    memset(Hg, 0, sizeof Hg);
+    skew3(e2, -1.0, S); /* d c / d e1 = -[e2]x */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) { Hf[i][3 + j] = S[i][j]; Hf[3 + j][i] = S[i][j]; }
+    skew3(e1, 1.0, S);  /* d c / d e2 = [e1]x */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) { Hf[i][6 + j] = S[i][j]; Hf[6 + j][i] = S[i][j]; }
+    skew3(a, -1.0, S);  /* d (e2 x a) / d e2 = -[a]x */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) { Hf[3 + i][6 + j] = S[i][j]; Hf[6 + j][3 + i] = S[i][j]; }
+    /* Hessian of g = sqrt(c.c + eps^2) in (e1, e2): Jc^T (I - ch ch^T) Jc / g
+     * plus ch . d2c, with Jc = [-[e2]x, [e1]x] */
+    double Jc[3][6];
+    skew3(e2, -1.0, S);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) Jc[i][j] = S[i][j];
+    skew3(e1, 1.0, S);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) Jc[i][3 + j] = S[i][j];
+    double PJ[3][6];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 6; j++) {
+            double v = 0.0;
+            for (int k = 0; k < 3; k++)
+                v += ((i == k ? 1.0 : 0.0) - ch[i] * ch[k]) * Jc[k][j];
+            PJ[i][j] = v;
+        }
+    for (int i = 0; i < 6; i++)
+        for (int j = 0; j < 6; j++) {
+            double v = 0.0;
+            for (int k = 0; k < 3; k++) v += Jc[k][i] * PJ[k][j];
+            Hg[3 + i][3 + j] = v / g;
+        }
+    skew3(ch, -1.0, S); /* d2 (w . e1 x e2) / de1 de2 = -[w]x */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            Hg[3 + i][6 + j] += S[i][j];
+            Hg[6 + j][3 + i] += S[i][j];
+        }
+    for (int i = 0; i < 9; i++)
+        for (int j = 0; j < 9; j++)
+            Hz[i][j] = (Hf[i][j] - (gf[i] * gg[j] + gg[i] * gf[j]) / g +
+                        2.0 * r * gg[i] * gg[j] / g - r * Hg[i][j]) / g;
+    return r / (sg * sg);
+}
+
+/* Twist cell energy (fl == NULL), or force (12) and df/dx (12x12). */
+static double kern_twist(const drape_model *m, const drape_cell *q, const double *x,
+                         double *fl, double Jl[12][12])
+{
+    double sg = m->L->sigma, w = q->weight;
+    double gz[9], Hz[9][9], d1, d2;
+    if (!fl) {
+        double tau = cell_twist(m, q, x, NULL, NULL);
+        return w * sg * sg * drape_fabric_twist_energy(&m->F, tau, NULL, NULL);
+    }
+    double tau = cell_twist(m, q, x, gz, Jl ? Hz : NULL);
+    drape_fabric_twist_energy(&m->F, tau, &d1, &d2);
+    /* E(z) = w sg^2 Wt(r / sg^2): dE/dz = w Wt' gz,
+     * d2E/dz2 = w (Wt'' gz gz^T / sg^2 + Wt' Hz) */
+    double Ez[9];
+    for (int k = 0; k < 9; k++) Ez[k] = w * d1 * gz[k];
+    for (int i = 0; i < 4; i++)
+        for (int d = 0; d < 3; d++) {
+            double v = 0.0;
+            for (int u = 0; u < 3; u++) v += CELL_CZ[u][i] * Ez[3 * u + d];
+            fl[3 * i + d] = -v;
+        }
+    if (!Jl) return 0.0;
+    double Hzz[9][9];
+    for (int i = 0; i < 9; i++)
+        for (int j = 0; j < 9; j++)
+            Hzz[i][j] = w * (d2 * gz[i] * gz[j] / (sg * sg) + d1 * Hz[i][j]);
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            for (int di = 0; di < 3; di++)
+                for (int dj = 0; dj < 3; dj++) {
+                    double v = 0.0;
+                    for (int u = 0; u < 3; u++) {
+                        if (CELL_CZ[u][i] == 0.0) continue;
+                        for (int t = 0; t < 3; t++)
+                            v += CELL_CZ[u][i] * CELL_CZ[t][j] * Hzz[3 * u + di][3 * t + dj];
+                    }
+                    Jl[3 * i + di][3 * j + dj] = -v;
+                }
+    return 0.0;
+}
+
 /* ------------------------------------------------------------- scatter */
 
 static void add_forces(double *f, const int *ids, int np, const double *fl)
@@ -404,8 +553,8 @@ static void add_forces(double *f, const int *ids, int np, const double *fl)
 
 /* Add local blocks Jl (np particles) into the CSC values V through the
  * element's slots (np*np, -1 where a particle is fixed). */
-static void add_blocks(const drape_model *m, const int64_t *slots,
-                       const int *ids, int np, double Jl[9][9], double *V)
+static void add_blocks_ld(const drape_model *m, const int64_t *slots,
+                          const int *ids, int np, const double *Jl, int ld, double *V)
 {
     for (int i = 0; i < np; i++) {
         for (int j = 0; j < np; j++) {
@@ -414,9 +563,15 @@ static void add_blocks(const drape_model *m, const int64_t *slots,
             int64_t st = m->colstride[m->L->free_id[ids[j]]];
             for (int c = 0; c < 3; c++)
                 for (int r = 0; r < 3; r++)
-                    V[s + c * st + r] += Jl[3 * i + r][3 * j + c];
+                    V[s + c * st + r] += Jl[(3 * i + r) * ld + 3 * j + c];
         }
     }
+}
+
+static void add_blocks(const drape_model *m, const int64_t *slots,
+                       const int *ids, int np, double Jl[9][9], double *V)
+{
+    add_blocks_ld(m, slots, ids, np, &Jl[0][0], 9, V);
 }
 
 /* Fill the segment cache for positions x. */
@@ -487,6 +642,13 @@ static int eval(drape_model *m, unsigned parts, const double *x,
             ids[0] = H->prev; ids[1] = H->mid; ids[2] = H->next;
             if (f) add_forces(f, ids, 3, fl);
             if (K) add_blocks(m, m->hslot + 9 * (int64_t)h, ids, 3, Jl, K);
+        }
+        for (int c = 0; m->use_cells && !rc && c < L->n_cells; c++) {
+            const drape_cell *Q = &L->cells[c];
+            double fq[12], Jq[12][12];
+            kern_twist(m, Q, x, fq, K ? Jq : NULL);
+            if (f) add_forces(f, Q->p, 4, fq);
+            if (K) add_blocks_ld(m, m->qslot + 16 * (int64_t)c, Q->p, 4, &Jq[0][0], 12, K);
         }
     }
     if (!rc && (parts & DRAPE_PART_SHEAR)) {
@@ -578,6 +740,8 @@ int drape_model_energy(drape_model *m, const double *x, drape_energies *E)
             if (s < MODEL_SIN_TINY && c < 0.0) rc = 1;
             E->bend += bend_g(m, H, atan2(s, c), NULL, NULL);
         }
+        for (int c = 0; m->use_cells && c < L->n_cells; c++)
+            E->bend += kern_twist(m, &L->cells[c], x, NULL, NULL);
     }
     if (m->parts & DRAPE_PART_SHEAR) {
         for (int k = 0; k < L->n_corners; k++) {

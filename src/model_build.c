@@ -40,12 +40,13 @@ static void push_pairs(const drape_lattice *L, const int *ids, int np,
 /* Block CSC (nf block columns) of the elements selected, with every
  * diagonal block.  Allocates *bcol (nf + 1) and *brow. */
 static int build_blocks(const drape_lattice *L, int edges, int hinges,
-                        int corners, int64_t **bcol, int **brow)
+                        int corners, int cells, int64_t **bcol, int **brow)
 {
     int nf = L->n_free;
     int64_t cap = (int64_t)nf + (edges ? 4 * (int64_t)L->n_edges : 0) +
                   (hinges ? 9 * (int64_t)L->n_hinges : 0) +
-                  (corners ? 9 * (int64_t)L->n_corners : 0);
+                  (corners ? 9 * (int64_t)L->n_corners : 0) +
+                  (cells ? 16 * (int64_t)L->n_cells : 0);
     int64_t n = 0, *cnt = NULL;
     int *pc = NULL, *pr = NULL, *rows = NULL;
     int ids[3];
@@ -81,6 +82,8 @@ static int build_blocks(const drape_lattice *L, int edges, int hinges,
             ids[2] = L->corners[c].weft;
             push_pairs(L, ids, 3, pc, pr, &n);
         }
+    if (cells)
+        for (int c = 0; c < L->n_cells; c++) push_pairs(L, L->cells[c].p, 4, pc, pr, &n);
     /* counting sort by column */
     for (int64_t k = 0; k < n; k++) cnt[pc[k] + 1]++;
     for (int q = 0; q < nf; q++) cnt[q + 1] += cnt[q];
@@ -162,7 +165,7 @@ static int64_t *element_slots(const drape_lattice *L, const int64_t *bcol,
                               void (*ids_of)(const drape_lattice *, int, int *))
 {
     int64_t *s = drape_malloc(sizeof(int64_t) * (size_t)(nel > 0 ? np * np * (int64_t)nel : 1));
-    int ids[3];
+    int ids[4];
     if (!s) return NULL;
     for (int e = 0; e < nel; e++) {
         ids_of(L, e, ids);
@@ -177,6 +180,11 @@ static void edge_ids(const drape_lattice *L, int e, int *ids)
 {
     ids[0] = L->edges[e].a;
     ids[1] = L->edges[e].b;
+}
+
+static void cell_ids(const drape_lattice *L, int c, int *ids)
+{
+    memcpy(ids, L->cells[c].p, sizeof L->cells[c].p);
 }
 
 static void hinge_ids(const drape_lattice *L, int h, int *ids)
@@ -411,7 +419,11 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
     int use_edges = (m->parts & (DRAPE_PART_STRETCH | DRAPE_PART_EDGE)) != 0;
     int use_hinges = (m->parts & DRAPE_PART_BEND) != 0;
     int use_corners = (m->parts & DRAPE_PART_SHEAR) != 0;
-    if (build_blocks(L, use_edges, use_hinges, use_corners, &bcol, &brow)) goto nomem;
+    /* twist cells belong to bending (issue 18) */
+    int use_cells = use_hinges && L->n_cells > 0 && m->F.has_bias;
+    m->use_cells = use_cells;
+    if (build_blocks(L, use_edges, use_hinges, use_corners, use_cells, &bcol, &brow))
+        goto nomem;
     if (expand_blocks(m->nf, bcol, brow, &m->pat)) goto nomem;
 
     m->colstride = drape_malloc(sizeof(int64_t) * (size_t)(m->nf > 0 ? m->nf : 1));
@@ -440,9 +452,13 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
         m->cslot = element_slots(L, bcol, brow, L->n_corners, 3, corner_ids);
         if (!m->cslot) goto nomem;
     }
+    if (use_cells) {
+        m->qslot = element_slots(L, bcol, brow, L->n_cells, 4, cell_ids);
+        if (!m->qslot) goto nomem;
+    }
     if (build_segments(m, use_edges, use_hinges, use_corners)) goto nomem;
     if (m->parts & DRAPE_PART_EDGE) {
-        if (build_blocks(L, 1, 0, 0, &dcol, &drow)) goto nomem;
+        if (build_blocks(L, 1, 0, 0, 0, &dcol, &drow)) goto nomem;
     }
     if (build_first_order(m, dcol, drow)) goto nomem;
     goto out;
@@ -473,6 +489,7 @@ void drape_model_free(drape_model *m)
     drape_free(m->eslot);
     drape_free(m->hslot);
     drape_free(m->cslot);
+    drape_free(m->qslot);
     drape_free(m->kmap);
     drape_free(m->dmap);
     drape_free(m->jid);

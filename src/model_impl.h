@@ -33,6 +33,8 @@ struct drape_model {
     int64_t *eslot;     /* 4 per edge (aa, ab, ba, bb), -1 if not free */
     int64_t *hslot;     /* 9 per hinge (prev, mid, next)^2 */
     int64_t *cslot;     /* 9 per corner (mid, warp, weft)^2 */
+    int64_t *qslot;     /* 16 per twist cell (p0..p3)^2 */
+    int use_cells;      /* twist cells evaluated with DRAPE_PART_BEND */
     int64_t *kmap;      /* nnz(K): position of M^-1 K entry in J */
     int64_t *dmap;      /* nnz(K): position of M^-1 D entry in J, or -1 */
     int64_t *jid;       /* N: position of the identity entry (j, N + j) */

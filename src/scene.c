@@ -52,8 +52,8 @@ static const char *const form_names[] = {"consistent", "seed", NULL};
 
 /* drape_method order */
 const char *const drape_method_names[] = {"default", "dynamic", "static", "fall", "animate", NULL};
-static const char *const term_names[] = {"stretch", "bend", "shear",
-                                         "gravity", NULL};
+const char *const drape_term_names[] = {"stretch", "bend", "shear", "gravity", "bias",
+                                        NULL};
 static const char *const table_shape_names[] = {"square", "round", NULL};
 static const char *const dir_names[] = {"weft", "warp", NULL}; /* = drape_dir */
 
@@ -652,7 +652,7 @@ static int parse_model(const scene_ctx *c, const drape_ynode *root,
     }
     if ((v = drape_ynode_get(m, "terms", NULL)) != NULL) {
         char list[128];
-        name_list(term_names, list, sizeof list);
+        name_list(drape_term_names, list, sizeof list);
         if (v->type != DRAPE_YNODE_SEQUENCE || v->n == 0)
             return drape_ynode_error(
                 c->err, c->doc, v, "model.terms", DRAPE_E_INPUT,
@@ -664,12 +664,12 @@ static int parse_model(const scene_ctx *c, const drape_ynode *root,
             char path[PATH_MAX_KEY];
             int t;
             snprintf(path, sizeof path, "model.terms[%zu]", k);
-            if (parse_enum(c, v->items[k], path, term_names, &t)) return -1;
+            if (parse_enum(c, v->items[k], path, drape_term_names, &t)) return -1;
             if (s->terms & (1u << t))
                 return drape_ynode_error(c->err, c->doc, v->items[k], path,
                                          DRAPE_E_INPUT,
                                          "term `%s` is listed twice",
-                                         term_names[t]);
+                                         drape_term_names[t]);
             s->terms |= 1u << t;
         }
     }

@@ -124,7 +124,7 @@ START_TEST(test_cusick)
     ck_assert_uint_eq(s.perturb_seed, 1);
     ck_assert_int_eq(s.n_pins, 0);
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_CONSISTENT);
-    ck_assert_uint_eq(s.terms, 1u | 2u | 4u | 8u);
+    ck_assert_uint_eq(s.terms, 1u | 2u | 4u | 8u | 16u); /* the shipped list adds bias */
     ck_assert_close_rel(s.damping_air, 2.0, 1e-12);   /* 2 1/s */
     ck_assert_close_rel(s.damping_edge, 0.02, 1e-12); /* 0.02 N.s/m */
     ck_assert_str_eq(s.integrator, "arkode-imex");
@@ -160,7 +160,7 @@ START_TEST(test_hang)
     ck_assert_int_eq(s.pins[1][0], -1);
     ck_assert_int_eq(s.pins[1][1], -1);
     ck_assert_int_eq(s.has_perturbation, 0);
-    ck_assert_uint_eq(s.terms, DRAPE_TERM_ALL);
+    ck_assert_uint_eq(s.terms, DRAPE_TERM_ALL); /* the shipped list adds bias (issue 18) */
     ck_assert_close_rel(s.damping_air, 0.5, 1e-12);
     ck_assert(s.damping_edge == 0.0);
     ck_assert_str_eq(s.integrator, "cvode-bdf");
@@ -211,7 +211,7 @@ START_TEST(test_cantilever)
     ck_assert_close_rel(s.overhang, 0.06, 1e-12);
     ck_assert_close_rel(s.spacing, 0.0025, 1e-12); /* 0.25 cm */
     ck_assert_uint_eq(s.terms, DRAPE_TERM_STRETCH | DRAPE_TERM_BEND |
-                                   DRAPE_TERM_GRAVITY);
+                                   DRAPE_TERM_GRAVITY | DRAPE_TERM_BIAS);
     ck_assert_close_rel(s.damping_air, 5.0, 1e-12);
     ck_assert_str_eq(s.integrator, "cvode-bdf");
     ck_assert_close_rel(s.rtol, 1e-6, 1e-12);
@@ -257,7 +257,7 @@ START_TEST(test_defaults)
     ck_assert_close_rel(s.support_diameter, 0.18, 1e-12);
     ck_assert_int_eq(s.has_perturbation, 0);
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_CONSISTENT);
-    ck_assert_uint_eq(s.terms, 15u);
+    ck_assert_uint_eq(s.terms, 31u); /* all five, bias included (issue 18) */
     ck_assert(s.damping_air == 0.0 && s.damping_edge == 0.0);
     ck_assert_str_eq(s.integrator, "auto");
     ck_assert_close_rel(s.rtol, 1e-4, 1e-12);

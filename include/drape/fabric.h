@@ -29,6 +29,9 @@ typedef struct drape_fabric {
     double weight;        /* areal density W, kg/m^2 */
     double k[2];          /* tensile stiffness per unit width, N/m, [DRAPE_WEFT], [DRAPE_WARP] */
     drape_fit bend[2];    /* M(K): K in 1/m, M in N.m/m, per direction */
+    drape_fit bend_bias;  /* M(K) of a strip cut at 45 degrees (optional
+                             `bending.bias`, issue 18); valid if has_bias */
+    int has_bias;
     drape_fit shear[2];   /* F(gamma): gamma in rad, F in N/m, per direction
                              (both equal when the file gives one curve) */
     drape_fit shear_mean; /* (shear[0] + shear[1]) / 2, used by the model */
@@ -47,5 +50,14 @@ int drape_fabric_load(const char *path, drape_fabric *f, drape_error *err,
  * (N/m per rad). */
 double drape_fabric_bending_rigidity(const drape_fabric *f, drape_dir d);
 double drape_fabric_shear_rigidity(const drape_fabric *f);
+
+/* The twist energy density Wt(tau) of a fabric with a bias curve (tau the
+ * twist curvature kappa_xy, 1/m; J/m^2), chosen so that cylindrical
+ * bending at 45 degrees stores the measured bias energy:
+ *     Wt(tau) = Wb_bias(2 tau) - Wb_weft(tau) - Wb_warp(tau)
+ * (docs/model.md, "Bias bending").  Even in tau.  Returns Wt and, if not
+ * NULL, *d1 = Wt'(tau) and *d2 = Wt''(tau).  0 without a bias curve. */
+double drape_fabric_twist_energy(const drape_fabric *f, double tau, double *d1,
+                                 double *d2);
 
 #endif /* DRAPE_FABRIC_H */

@@ -54,6 +54,14 @@ typedef struct drape_corner {
     double weight;  /* area fraction of the quarter cell, 1 when whole */
 } drape_corner;
 
+/* Twist cell (issue 18, the `bias` term): the lattice square with lower
+ * left corner p[0] = (i, j) and, counter-clockwise, p[1] = (i+1, j),
+ * p[2] = (i+1, j+1), p[3] = (i, j+1). */
+typedef struct drape_cell {
+    int p[4];
+    double weight;  /* area fraction of the square inside the specimen */
+} drape_cell;
+
 typedef struct drape_lattice {
     double sigma;          /* spacing, m */
     int ni, nj;            /* bounding grid size */
@@ -71,6 +79,7 @@ typedef struct drape_lattice {
     int n_edges;   drape_edge *edges;
     int n_hinges;  drape_hinge *hinges;
     int n_corners; drape_corner *corners;
+    int n_cells;   drape_cell *cells;   /* only with the bias term */
 
     double area_nominal;   /* specimen area from its dimensions, m^2 */
     double mass_total;     /* sum of masses, kg */

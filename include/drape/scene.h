@@ -39,7 +39,10 @@ enum {
     DRAPE_TERM_BEND = 1u << 1,
     DRAPE_TERM_SHEAR = 1u << 2,
     DRAPE_TERM_GRAVITY = 1u << 3,
-    DRAPE_TERM_ALL = 0xfu
+    DRAPE_TERM_BIAS = 1u << 4,  /* twist cells (issue 18): built only where
+                                   the fabric gives bending.bias, and with
+                                   bend */
+    DRAPE_TERM_ALL = 0x1fu
 };
 
 /* How a run finds its result (solver.method, --method). */
@@ -56,6 +59,8 @@ typedef enum drape_method {
 } drape_method;
 
 /* "default", "dynamic", "static", "fall", "animate", NULL */
+/* Names of the DRAPE_TERM_* bits, in bit order (NULL-terminated). */
+extern const char *const drape_term_names[];
 extern const char *const drape_method_names[];
 
 /* Repeated specimens (MODEL.md 6): at most this many per run. */

@@ -1,0 +1,486 @@
+/* check_bias.c: bending in every direction (issue 18): the optional bias
+ * curve of a fabric, the twist cells of the lattice and their energy,
+ * forces and exact Jacobian in the model.
+ *
+ * Independent expectations: forces against finite differences of the
+ * energy, K against finite differences of the forces; a sheet bent into a
+ * cylinder at 45 degrees to the yarns stores, per unit area, the energy of
+ * the fabric's measured bias curve (computed here from that curve alone,
+ * never from the twist term), at 0 and 90 degrees that of its weft and
+ * warp curves with no twist energy at all; uniform twist z = tau x y stores
+ * Wb_bias(2 tau) - Wb_weft(tau) - Wb_warp(tau) per unit area.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "drape/fabric.h"
+#include "drape/fit.h"
+#include "drape/lattice.h"
+#include "drape/model.h"
+#include "drape/scene.h"
+#include "drape/units.h"
+#include "testutil.h"
+
+#define PI 3.14159265358979323846
+
+/* One-piece cubic fit M(K) = c1 K + c3 K^3 (N.m/m, K in 1/m): smooth, so
+ * finite differences see no knots. */
+static void cubic(drape_fit *f, double c1, double c3)
+{
+    memset(f, 0, sizeof *f);
+    f->n = 1;
+    f->p[0].from = 0.0;
+    f->p[0].to = INFINITY;
+    f->p[0].ncoef = 4;
+    f->p[0].c[1] = c1;
+    f->p[0].c[3] = c3;
+    drape_fit_prepare(f);
+}
+
+/* A made-up smooth fabric: warp and weft unequal, bias stiffer than the
+ * warp and weft hinges alone make it at 45 degrees. */
+static void smooth_fabric(drape_fabric *F, int bias)
+{
+    memset(F, 0, sizeof *F);
+    strcpy(F->name, "smooth");
+    F->weight = 0.2;
+    F->k[DRAPE_WEFT] = 3000.0;
+    F->k[DRAPE_WARP] = 5000.0;
+    cubic(&F->bend[DRAPE_WARP], 4e-5, 2e-9);
+    cubic(&F->bend[DRAPE_WEFT], 2e-5, 1e-9);
+    cubic(&F->shear[DRAPE_WARP], 50.0, 0.0);
+    cubic(&F->shear[DRAPE_WEFT], 50.0, 0.0);
+    ck_assert_int_eq(drape_fit_mean(&F->shear[0], &F->shear[1], &F->shear_mean), 0);
+    if (bias) {
+        cubic(&F->bend_bias, 2.5e-5, 3e-9);
+        F->has_bias = 1;
+    }
+}
+
+static void load_fabric(const char *rel, drape_fabric *F)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    ck_assert_msg(drape_fabric_load(tu_src(rel), F, &err, NULL, NULL) == 0, "%s", err.msg);
+}
+
+static void rect_scene(drape_scene *s, double w, double h, double sg, unsigned terms)
+{
+    memset(s, 0, sizeof *s);
+    strcpy(s->path, "test.yaml");
+    s->kind = DRAPE_SCENE_HANG;
+    s->shape = DRAPE_SHAPE_RECTANGLE;
+    s->width = w;
+    s->height = h;
+    s->spacing = sg;
+    s->terms = terms;
+}
+
+static drape_lattice *lattice(const drape_scene *s, const drape_fabric *F)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    drape_lattice *L = drape_lattice_new(s, F, &err);
+    ck_assert_msg(L != NULL, "%s", err.msg);
+    ck_assert_int_eq(drape_lattice_check(L), 0);
+    return L;
+}
+
+static drape_model *model(const drape_lattice *L, const drape_fabric *F, unsigned terms)
+{
+    drape_model_opts o = {terms, DRAPE_FORM_CONSISTENT, 0.0, 0.0, DRAPE_G_STANDARD};
+    drape_error err;
+    drape_error_clear(&err);
+    drape_model *m = drape_model_new(L, F, &o, &err);
+    ck_assert_msg(m != NULL, "%s", err.msg);
+    return m;
+}
+
+static double bend_energy(drape_model *m, const double *x)
+{
+    drape_energies E;
+    ck_assert_int_eq(drape_model_energy(m, x, &E), 0);
+    return E.bend;
+}
+
+/* deterministic uniform(-1, 1) */
+static double urand(uint64_t *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return 2.0 * ((double)((*s * 2685821657736338717ull) >> 11) / 9007199254740992.0) - 1.0;
+}
+
+/* Material point (u, v) of the flat sheet mapped isometrically onto a
+ * cylinder of curvature kappa whose curvature direction is at angle th
+ * from the weft (x) axis: arc length s along (cos th, sin th). */
+static void cylinder(const drape_lattice *L, double kappa, double th, double *x)
+{
+    double c = cos(th), s = sin(th), R = 1.0 / kappa;
+    for (int p = 0; p < L->n; p++) {
+        double u = L->x0[3 * p], v = L->x0[3 * p + 1];
+        double a = u * c + v * s, t = -u * s + v * c;
+        double along = R * sin(a / R), up = R * (1.0 - cos(a / R));
+        x[3 * p] = along * c - t * s;
+        x[3 * p + 1] = along * s + t * c;
+        x[3 * p + 2] = up;
+    }
+}
+
+/* Area of the lattice rectangle (what the elements of a rectangle stand for). */
+static double lattice_area(const drape_lattice *L)
+{
+    return (double)(L->ni - 1) * (L->nj - 1) * L->sigma * L->sigma;
+}
+
+/* ----------------------------------------------------------- the fabric */
+
+START_TEST(test_fabric_bias_curve)
+{
+    drape_fabric F;
+    load_fabric("fabrics/cotton-poly-wang.yaml", &F);
+    ck_assert_int_eq(F.has_bias, 1);
+    /* row 1 of royal-target: ke(0) = 1.07997696e-4 N.m, M = K ke / 4 */
+    ck_assert_close_rel(drape_fit_slope(&F.bend_bias, 0.0), 1.07997696e-4 / 4, 1e-9);
+    /* Wt(tau) = Wb_bias(2 tau) - Wb_weft(tau) - Wb_warp(tau), by the trapezoidal
+     * rule on the moment curves here (independent of the closed form) */
+    for (double tau = 3.0; tau < 60.0; tau += 11.0) {
+        int n = 20000;
+        double wt = 0.0, h = tau / n;
+        for (int i = 0; i <= n; i++) {
+            double t = i * h, wgt = (i == 0 || i == n) ? 0.5 : 1.0;
+            wt += wgt * h * (2.0 * drape_fit_value(&F.bend_bias, 2.0 * t) -
+                             drape_fit_value(&F.bend[DRAPE_WARP], t) -
+                             drape_fit_value(&F.bend[DRAPE_WEFT], t));
+        }
+        double d1, d2;
+        double got = drape_fabric_twist_energy(&F, tau, &d1, &d2);
+        ck_assert_close_rel(got, wt, 1e-6);
+        ck_assert_close_rel(drape_fabric_twist_energy(&F, -tau, NULL, NULL), got, 1e-15);
+        ck_assert_close_rel(d1, 2.0 * drape_fit_value(&F.bend_bias, 2.0 * tau) -
+                                    drape_fit_value(&F.bend[DRAPE_WARP], tau) -
+                                    drape_fit_value(&F.bend[DRAPE_WEFT], tau), 1e-12);
+    }
+    /* the seed's fabrics have none */
+    load_fabric("fabrics/cotton-breen.yaml", &F);
+    ck_assert_int_eq(F.has_bias, 0);
+    ck_assert(drape_fabric_twist_energy(&F, 5.0, NULL, NULL) == 0.0);
+}
+END_TEST
+
+START_TEST(test_fabric_bias_too_soft)
+{
+    const char *p = tu_write_file("soft-bias.yaml",
+        "fabric: soft-bias\n"
+        "weight: 0.2 kg/m^2\n"
+        "tensile_stiffness: 1000 N/m\n"
+        "bending:\n"
+        "  units: {curvature: 1/m, moment: N.m/m}\n"
+        "  warp: [{from: 0, poly: [0, 4e-5]}]\n"
+        "  weft: [{from: 0, poly: [0, 2e-5]}]\n"
+        "  bias: [{from: 0, poly: [0, 1e-5]}]\n"
+        "shear:\n"
+        "  units: {angle: rad, force: N/m}\n"
+        "  curve: [{from: 0, poly: [0, 50]}]\n");
+    drape_fabric F;
+    drape_error err;
+    drape_error_clear(&err);
+    ck_assert_int_eq(drape_fabric_load(p, &F, &err, NULL, NULL), -1);
+    ck_assert_int_eq(err.line, 8);
+    ck_assert_str_eq(err.key, "bending.bias");
+    ck_assert_ptr_nonnull(strstr(err.msg, "twist rigidity would be negative"));
+}
+END_TEST
+
+/* ------------------------------------------------------------ the lattice */
+
+START_TEST(test_lattice_cells)
+{
+    drape_fabric F, G;
+    smooth_fabric(&F, 1);
+    smooth_fabric(&G, 0);
+    drape_scene s;
+    rect_scene(&s, 0.06, 0.05, 0.01, DRAPE_TERM_ALL); /* 7 x 6 points */
+    drape_lattice *L = lattice(&s, &F);
+    ck_assert_int_eq(L->n_cells, 6 * 5);
+    for (int c = 0; c < L->n_cells; c++) ck_assert(L->cells[c].weight == 1.0);
+    drape_lattice_free(L);
+    /* no bias curve, no `bias` term or no `bend`: no cells */
+    L = lattice(&s, &G);
+    ck_assert_int_eq(L->n_cells, 0);
+    drape_lattice_free(L);
+    rect_scene(&s, 0.06, 0.05, 0.01, DRAPE_TERM_ALL & ~(unsigned)DRAPE_TERM_BIAS);
+    L = lattice(&s, &F);
+    ck_assert_int_eq(L->n_cells, 0);
+    drape_lattice_free(L);
+    rect_scene(&s, 0.06, 0.05, 0.01, DRAPE_TERM_ALL & ~(unsigned)DRAPE_TERM_BEND);
+    L = lattice(&s, &F);
+    ck_assert_int_eq(L->n_cells, 0);
+    drape_lattice_free(L);
+    /* a circle: cells with all four corners kept, weights in (0, 1] */
+    memset(&s, 0, sizeof s);
+    strcpy(s.path, "test.yaml");
+    s.kind = DRAPE_SCENE_CUSICK;
+    s.shape = DRAPE_SHAPE_CIRCLE;
+    s.diameter = 0.3;
+    s.support_diameter = 0.18;
+    s.spacing = 0.02;
+    s.terms = DRAPE_TERM_ALL;
+    L = lattice(&s, &F);
+    ck_assert_int_gt(L->n_cells, 0);
+    drape_lattice_free(L);
+}
+END_TEST
+
+/* ---------------------------------------------------- forces and Jacobian */
+
+/* max |f + dE/dx| / max |dE/dx| (bend part), fourth-order differences */
+static double fd_force_err(drape_model *m, const drape_lattice *L, double *x)
+{
+    int n3 = 3 * L->n;
+    double h = 1e-4 * L->sigma, num = 0.0, den = 0.0;
+    double *f = malloc(sizeof(double) * n3);
+    ck_assert_int_eq(drape_model_forces(m, DRAPE_PART_BEND, x, NULL, f), 0);
+    for (int i = 0; i < n3; i++) {
+        double x0 = x[i], e[4], st[4] = {2 * h, h, -h, -2 * h};
+        for (int k = 0; k < 4; k++) {
+            x[i] = x0 + st[k];
+            e[k] = bend_energy(m, x);
+        }
+        x[i] = x0;
+        double g = (8.0 * (e[1] - e[2]) - (e[0] - e[3])) / (12.0 * h);
+        if (fabs(f[i] + g) > num) num = fabs(f[i] + g);
+        if (fabs(g) > den) den = fabs(g);
+    }
+    free(f);
+    return num / den;
+}
+
+/* max |K - dF/dx| / max |K| over free coordinates; *outside counts FD
+ * entries above 1e-9 max |K| that are not in the pattern; *asym max
+ * |K - K^T| / max |K| */
+static double fd_jac_err(drape_model *m, const drape_lattice *L, double *x, int *outside,
+                         double *asym)
+{
+    const drape_pattern *P = drape_model_pattern(m);
+    int64_t N = P->n, n3 = 3 * L->n;
+    double *K = calloc((size_t)P->nnz + 1, sizeof(double));
+    double *A = calloc((size_t)(N * N), sizeof(double));
+    unsigned char *mk = calloc((size_t)(N * N), 1);
+    double *fk[4];
+    for (int k = 0; k < 4; k++) fk[k] = malloc(sizeof(double) * n3);
+    ck_assert_int_eq(drape_model_jacobian(m, DRAPE_PART_BEND, x, NULL, K, NULL), 0);
+    for (int64_t j = 0; j < N; j++)
+        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++) {
+            A[P->rowind[k] * N + j] = K[k];
+            mk[P->rowind[k] * N + j] = 1;
+        }
+    double kmax = 0.0, num = 0.0, as = 0.0, h = 1e-4 * L->sigma;
+    for (int64_t k = 0; k < N * N; k++) kmax = fmax(kmax, fabs(A[k]));
+    *outside = 0;
+    for (int64_t j = 0; j < N; j++) {
+        int64_t gj = 3 * (int64_t)L->free_to_id[j / 3] + j % 3;
+        double x0 = x[gj], st[4] = {2 * h, h, -h, -2 * h};
+        for (int k = 0; k < 4; k++) {
+            x[gj] = x0 + st[k];
+            ck_assert_int_eq(drape_model_forces(m, DRAPE_PART_BEND, x, NULL, fk[k]), 0);
+        }
+        x[gj] = x0;
+        for (int64_t i = 0; i < N; i++) {
+            int64_t gi = 3 * (int64_t)L->free_to_id[i / 3] + i % 3;
+            double d = (8.0 * (fk[1][gi] - fk[2][gi]) - (fk[0][gi] - fk[3][gi])) / (12.0 * h);
+            num = fmax(num, fabs(d - A[i * N + j]));
+            if (!mk[i * N + j] && fabs(d) > 1e-9 * kmax) (*outside)++;
+            as = fmax(as, fabs(A[i * N + j] - A[j * N + i]));
+        }
+    }
+    *asym = as / kmax;
+    for (int k = 0; k < 4; k++) free(fk[k]);
+    free(K);
+    free(A);
+    free(mk);
+    return num / kmax;
+}
+
+START_TEST(test_bias_fd)
+{
+    drape_fabric F, G;
+    smooth_fabric(&F, 1);
+    smooth_fabric(&G, 0);
+    drape_scene s;
+    rect_scene(&s, 0.04, 0.03, 0.01, DRAPE_TERM_ALL); /* 5 x 4 points */
+    drape_lattice *L = lattice(&s, &F);
+    ck_assert_int_eq(L->n_cells, 12);
+    drape_model *m = model(L, &F, DRAPE_TERM_ALL);
+    drape_model *m0 = model(L, &G, DRAPE_TERM_ALL);
+    int n3 = 3 * L->n;
+    double *x = malloc(sizeof(double) * n3);
+    uint64_t seed = 12345;
+    /* states: random 0.2 sigma; a 30-degree cylinder with kappa sigma = 0.6
+     * plus noise; a strong twist z = 40 x y / sigma plus noise */
+    for (int st = 0; st < 3; st++) {
+        if (st == 1) cylinder(L, 60.0, PI / 6, x);
+        for (int p = 0; p < L->n; p++) {
+            double u = L->x0[3 * p], v = L->x0[3 * p + 1];
+            if (st == 0) memcpy(x + 3 * p, L->x0 + 3 * p, sizeof(double) * 3);
+            if (st == 2) {
+                x[3 * p] = u;
+                x[3 * p + 1] = v;
+                x[3 * p + 2] = 40.0 * u * v;
+            }
+            double amp = st == 0 ? 0.2 * L->sigma : 0.03 * L->sigma;
+            for (int k = 0; k < 3; k++) x[3 * p + k] += amp * urand(&seed);
+        }
+        double ef = fd_force_err(m, L, x);
+        int out;
+        double asym, ek = fd_jac_err(m, L, x, &out, &asym);
+        if (getenv("CHECK_BIAS_VERBOSE"))
+            printf("state %d: forces %.2g, K %.2g, asym %.2g\n", st, ef, ek, asym);
+        ck_assert_msg(ef < 1e-7, "state %d: forces rel err %g", st, ef);
+        ck_assert_msg(ek < 1e-6, "state %d: K rel err %g", st, ek);
+        ck_assert_msg(out == 0, "state %d: %d FD entries outside the pattern", st, out);
+        ck_assert_msg(asym < 1e-13, "state %d: K not symmetric (%g)", st, asym);
+        /* the twist term is really there: without it the energy differs */
+        double eb = bend_energy(m, x), e0 = bend_energy(m0, x);
+        ck_assert_msg(fabs(eb - e0) > 0.01 * fabs(eb), "state %d: twist energy %g of %g", st,
+                      eb - e0, eb);
+    }
+    free(x);
+    drape_model_free(m);
+    drape_model_free(m0);
+    drape_lattice_free(L);
+}
+END_TEST
+
+/* --------------------------------------------------- the continuum limit */
+
+/* A rectangle bent into a cylinder of curvature kappa whose curvature
+ * direction is at th from the weft: the model's bending energy, and what
+ * the continuum gives for the areas its elements stand for: weft hinges
+ * (A_x, curvature kappa c^2), warp hinges (A_y, kappa s^2) and twist cells
+ * (A_c, twist tau = kappa c s), with the twist energy per area formed here
+ * from the three measured curves, Wb_bias(2 tau) - Wb_weft(tau) -
+ * Wb_warp(tau).  In the interior A_x = A_y = A_c and at 45 degrees this is
+ * Wb_bias(kappa) per area: the measured bias curve.  (The hinges of a row
+ * stop one node short of its ends, so A_x, A_y < A_c by a boundary strip;
+ * *per_area is the energy per area with A_x = A_y = A_c.) */
+static double cylinder_energy(const drape_fabric *F, unsigned terms, double sg, double kappa,
+                              double th, double *expect, double *per_area)
+{
+    drape_scene s;
+    rect_scene(&s, 0.05, 0.05, sg, terms);
+    drape_lattice *L = lattice(&s, F);
+    drape_model *m = model(L, F, terms);
+    double *x = malloc(sizeof(double) * 3 * (size_t)L->n);
+    cylinder(L, kappa, th, x);
+    double E = bend_energy(m, x), ax = 0.0, ay = 0.0, ac = 0.0, s2 = sg * sg;
+    for (int h = 0; h < L->n_hinges; h++)
+        *(L->hinges[h].dir == DRAPE_WEFT ? &ax : &ay) += L->hinges[h].weight * s2;
+    for (int c = 0; c < L->n_cells; c++) ac += L->cells[c].weight * s2;
+    double c = cos(th), sn = sin(th), tau = kappa * c * sn;
+    const drape_fit *bw = &F->bend[DRAPE_WARP], *bf = &F->bend[DRAPE_WEFT];
+    double wx = drape_fit_integral(bf, kappa * c * c), wy = drape_fit_integral(bw, kappa * sn * sn);
+    double wt = F->has_bias && (terms & DRAPE_TERM_BIAS)
+                    ? drape_fit_integral(&F->bend_bias, 2.0 * tau) -
+                          drape_fit_integral(bf, fabs(tau)) - drape_fit_integral(bw, fabs(tau))
+                    : 0.0;
+    *expect = ax * wx + ay * wy + ac * wt;
+    if (per_area) *per_area = wx + wy + wt;
+    free(x);
+    drape_model_free(m);
+    drape_lattice_free(L);
+    return E;
+}
+
+START_TEST(test_bias_cylinder)
+{
+    /* the measured curves of a real fabric (piecewise, knots at 10 1/m) */
+    drape_fabric F;
+    load_fabric("fabrics/cotton-poly-wang.yaml", &F);
+    const drape_fit *bw = &F.bend[DRAPE_WARP], *bf = &F.bend[DRAPE_WEFT], *bb = &F.bend_bias;
+    const unsigned nobias = DRAPE_TERM_ALL & ~(unsigned)DRAPE_TERM_BIAS;
+    for (int k = 0; k < 2; k++) {
+        double kappa = k ? 27.0 : 13.0, ex1, ex2, wa;
+        /* 45 degrees: the energy per area is the bias curve's */
+        double e1 = cylinder_energy(&F, DRAPE_TERM_ALL, 0.0025, kappa, PI / 4, &ex1, &wa) / ex1 - 1;
+        double e2 = cylinder_energy(&F, DRAPE_TERM_ALL, 0.00125, kappa, PI / 4, &ex2, NULL) / ex2 - 1;
+        ck_assert_close_rel(wa, drape_fit_integral(bb, kappa), 1e-12);
+        if (getenv("CHECK_BIAS_VERBOSE"))
+            printf("kappa %g: 45 deg rel err %.3g (2.5 mm), %.3g (1.25 mm)\n", kappa, e1, e2);
+        ck_assert_msg(fabs(e2) < 1e-3, "45 deg, kappa %g: rel err %g", kappa, e2);
+        ck_assert_msg(fabs(e2) < 0.35 * fabs(e1) || fabs(e2) < 1e-6,
+                      "45 deg: no convergence (%g, %g)", e1, e2);
+        /* without the bias term: the seed lattice's (Wb_weft + Wb_warp)(kappa / 2) */
+        double e0 = cylinder_energy(&F, nobias, 0.00125, kappa, PI / 4, &ex1, &wa);
+        ck_assert_close_rel(e0, ex1, 1e-3);
+        ck_assert_close_rel(wa, drape_fit_integral(bw, kappa / 2) + drape_fit_integral(bf, kappa / 2),
+                            1e-12);
+        ck_assert(wa < 0.8 * drape_fit_integral(bb, kappa));
+        /* along the yarns: the weft (0) and warp (90 degrees) curves, no twist */
+        double eb = cylinder_energy(&F, DRAPE_TERM_ALL, 0.00125, kappa, 0.0, &ex1, &wa);
+        ck_assert_close_rel(eb, ex1, 1e-3);
+        ck_assert_close_rel(wa, drape_fit_integral(bf, kappa), 1e-12);
+        ck_assert_close_rel(eb, cylinder_energy(&F, nobias, 0.00125, kappa, 0.0, &ex1, NULL), 1e-12);
+        eb = cylinder_energy(&F, DRAPE_TERM_ALL, 0.00125, kappa, PI / 2, &ex1, &wa);
+        ck_assert_close_rel(eb, ex1, 1e-3);
+        ck_assert_close_rel(wa, drape_fit_integral(bw, kappa), 1e-12);
+        /* in between (22.5 degrees): the plate form */
+        eb = cylinder_energy(&F, DRAPE_TERM_ALL, 0.00125, kappa, PI / 8, &ex1, NULL);
+        ck_assert_close_rel(eb, ex1, 1e-3);
+    }
+}
+END_TEST
+
+START_TEST(test_bias_uniform_twist)
+{
+    /* z = tau x y: no warp or weft hinge turns (lattice lines stay straight),
+     * every cell has twist tau (to O(tau^2 L^2)): W = Wt(tau) per area */
+    drape_fabric F;
+    load_fabric("fabrics/cotton-poly-wang.yaml", &F);
+    drape_scene s;
+    rect_scene(&s, 0.03, 0.03, 0.0025, DRAPE_TERM_ALL);
+    drape_lattice *L = lattice(&s, &F);
+    drape_model *m = model(L, &F, DRAPE_TERM_ALL);
+    double *x = malloc(sizeof(double) * 3 * (size_t)L->n);
+    const drape_fit *bw = &F.bend[DRAPE_WARP], *bf = &F.bend[DRAPE_WEFT], *bb = &F.bend_bias;
+    for (double tau = 0.5; tau < 3.0; tau *= 2.0) {
+        for (int p = 0; p < L->n; p++) {
+            double u = L->x0[3 * p], v = L->x0[3 * p + 1];
+            x[3 * p] = u;
+            x[3 * p + 1] = v;
+            x[3 * p + 2] = tau * u * v;
+        }
+        double w = bend_energy(m, x) / lattice_area(L);
+        double expect = drape_fit_integral(bb, 2.0 * tau) - drape_fit_integral(bw, tau) -
+                        drape_fit_integral(bf, tau);
+        ck_assert_close_rel(w, expect, 1e-3);
+        /* linear range: 2 D66 tau^2, D66 = B_bias - (B_warp + B_weft) / 4 */
+        double d66 = drape_fit_slope(bb, 0.0) -
+                     0.25 * (drape_fit_slope(bw, 0.0) + drape_fit_slope(bf, 0.0));
+        ck_assert_close_rel(w, 2.0 * d66 * tau * tau, 0.05);
+    }
+    free(x);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
+Suite *bias_suite(void)
+{
+    Suite *s = suite_create("bias");
+    TCase *tc = tcase_create("bias");
+    tcase_set_timeout(tc, 60);
+    tcase_add_test(tc, test_fabric_bias_curve);
+    tcase_add_test(tc, test_fabric_bias_too_soft);
+    tcase_add_test(tc, test_lattice_cells);
+    tcase_add_test(tc, test_bias_fd);
+    tcase_add_test(tc, test_bias_cylinder);
+    tcase_add_test(tc, test_bias_uniform_twist);
+    suite_add_tcase(s, tc);
+    return s;
+}
