@@ -143,9 +143,13 @@ static int check_scene(const char *path)
     printf("  specimen             %s", shape_name(s.shape));
     if (s.shape == DRAPE_SHAPE_CIRCLE) printf(", diameter_m %.6g", s.diameter);
     if (s.shape == DRAPE_SHAPE_RECTANGLE) printf(", width_m %.6g, height_m %.6g", s.width, s.height);
-    if (s.shape == DRAPE_SHAPE_STRIP)
+    if (s.shape == DRAPE_SHAPE_STRIP) {
+        char dir[48];
+        if (s.strip_oblique) snprintf(dir, sizeof dir, "%.6g deg from the warp", s.strip_angle);
+        else snprintf(dir, sizeof dir, "%s", s.strip_dir == DRAPE_WARP ? "warp" : "weft");
         printf(", length_m %.6g, width_m %.6g, direction %s, overhang_m %.6g", s.length,
-               s.width, s.strip_dir == DRAPE_WARP ? "warp" : "weft", s.overhang);
+               s.width, dir, s.overhang);
+    }
     printf("\n");
     printf("  spacing_m            %.6g\n", s.spacing);
     printf("  energy_form          %s\n", drape_energy_form_name(s.energy_form));

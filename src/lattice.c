@@ -29,6 +29,11 @@
  *       cell   w_q = A(Q & S) / sigma^2, Q the square (i, j)-(i+1, j+1)
  *              whose four corners are particles; built only with the
  *              bias term and a fabric with a bias curve (issue 18);   (L5)
+ *   - a strip cut at an angle to the yarns (issue 18): the rectangle
+ *     rotated in the grid, areas by polygon clipping (rot_area); hinges at
+ *     the platform edge keep the part of their interval beyond it (L3'),
+ *     and the areas of missing hinges and cells along the staircase edges
+ *     are lumped onto the nearest ones (L6; weights may exceed 1);
  *   - the fixed set (clamps of each scene kind, pins) and free numbering;
  *   - the optional perturbation z += a * U(-1, 1) of free particles, from
  *     splitmix64 (Steele, Lea & Flood 2014, "Fast splittable pseudorandom
@@ -65,6 +70,11 @@ static const long MAX_GRID_POINTS = INT_MAX / 8;
  * overhangs the platform edge x = 0 (MODEL 5). */
 static const double CLAMP_HINGE_FRACTION = 0.5;
 
+/* Smallest such fraction of an oblique strip's hinge whose whole vertex
+ * interval lies on the platform (issue 18): a hinge 1 / 0.05 = 20 times
+ * stiffer than a free one, which holds its yarn straight. */
+static const double CLAMP_HINGE_MIN = 0.05;
+
 /* Geometry of a scene in grid-index units. */
 typedef struct geom {
     int ni, nj;
@@ -73,6 +83,12 @@ typedef struct geom {
     double lo[2], hi[2];  /* rectangle specimen, index units ([0]: i) */
     double ci, cj;        /* grid index of the world origin */
     int swap;             /* 1 (warp strip): x = (j - cj) s, y = -(i - ci) s */
+    int rot;              /* 1 (oblique strip, issue 18): the world position is
+                             x = ((i - ci) rs + (j - cj) rc) s,
+                             y = (-(i - ci) rc + (j - cj) rs) s, and lo/hi
+                             bound the strip in those rotated index units */
+    double rs, rc;        /* sin and cos of the strip's angle from the warp */
+    int clip_free;        /* 1: spec_free_area also cuts at x = 0 (cantilever) */
 } geom;
 
 /* ---- areas ----------------------------------------------------------- */
@@ -128,6 +144,61 @@ static double overlap(double a0, double a1, double b0, double b1)
     return hi > lo ? hi - lo : 0.0;
 }
 
+/* Rotated index units of a grid point (oblique strip). */
+static void rot_xy(const geom *g, double i, double j, double *X, double *Y)
+{
+    double u = i - g->ci, v = j - g->cj;
+    *X = u * g->rs + v * g->rc;
+    *Y = -u * g->rc + v * g->rs;
+}
+
+/* Clip the convex polygon P (n points, x/y pairs) to the half-plane
+ * s * (coord k) <= s * c (k = 0: X, 1: Y); returns the new count (<= n + 1). */
+static int clip_half(const double *P, int n, int k, double c, double s, double *Q)
+{
+    int m = 0;
+    for (int a = 0; a < n; a++) {
+        const double *p = P + 2 * a, *q = P + 2 * ((a + 1) % n);
+        double dp = s * (p[k] - c), dq = s * (q[k] - c);
+        if (dp <= 0.0) { Q[2 * m] = p[0]; Q[2 * m + 1] = p[1]; m++; }
+        if ((dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0)) {
+            double t = dp / (dp - dq);
+            Q[2 * m] = p[0] + t * (q[0] - p[0]);
+            Q[2 * m + 1] = p[1] + t * (q[1] - p[1]);
+            m++;
+        }
+    }
+    return m;
+}
+
+/* Area (index units) of the grid rectangle [x0, x1] x [y0, y1] inside the
+ * oblique strip, and, with free_only, only its part beyond the platform
+ * edge X > 0: the grid rectangle rotated into the strip's frame, clipped
+ * by the strip's sides (Sutherland-Hodgman on a convex polygon), area by
+ * the shoelace formula. */
+static double rot_area(const geom *g, double x0, double x1, double y0, double y1,
+                       int free_only)
+{
+    double P[2][2 * 10];
+    rot_xy(g, x0, y0, &P[0][0], &P[0][1]);
+    rot_xy(g, x1, y0, &P[0][2], &P[0][3]);
+    rot_xy(g, x1, y1, &P[0][4], &P[0][5]);
+    rot_xy(g, x0, y1, &P[0][6], &P[0][7]);
+    int n = 4, cur = 0;
+    const double lim[5][3] = {{0, g->hi[0], 1.0}, {0, g->lo[0], -1.0}, {1, g->hi[1], 1.0},
+                              {1, g->lo[1], -1.0}, {0, 0.0, -1.0}};
+    for (int k = 0; k < (free_only ? 5 : 4) && n > 0; k++) {
+        n = clip_half(P[cur], n, (int)lim[k][0], lim[k][1], lim[k][2], P[1 - cur]);
+        cur = 1 - cur;
+    }
+    double a = 0.0;
+    for (int k = 0; k < n; k++) {
+        const double *p = P[cur] + 2 * k, *q = P[cur] + 2 * ((k + 1) % n);
+        a += p[0] * q[1] - q[0] * p[1];
+    }
+    return 0.5 * fabs(a);
+}
+
 /* Area (index units) of the rectangle spanned by (x0, y0), (x1, y1) (any
  * order) inside the specimen. */
 static double spec_area(const geom *g, double x0, double x1, double y0,
@@ -136,6 +207,7 @@ static double spec_area(const geom *g, double x0, double x1, double y0,
     double t;
     if (x0 > x1) { t = x0; x0 = x1; x1 = t; }
     if (y0 > y1) { t = y0; y0 = y1; y1 = t; }
+    if (g->rot) return rot_area(g, x0, x1, y0, y1, 0);
     if (g->disc)
         return disc_rect_area(x0 - g->ci, x1 - g->ci, y0 - g->cj, y1 - g->cj,
                               g->r);
@@ -169,6 +241,12 @@ static long side_points(double len, double s)
 static int is_kept(const geom *g, int i, int j)
 {
     if (i < 0 || j < 0 || i >= g->ni || j >= g->nj) return 0;
+    if (g->rot) {
+        double X, Y, e = SNAP * (1.0 + fabs(g->lo[0]) + fabs(g->hi[0]));
+        rot_xy(g, i, j, &X, &Y);
+        return X >= g->lo[0] - e && X <= g->hi[0] + e && Y >= g->lo[1] - e &&
+               Y <= g->hi[1] + e;
+    }
     if (!g->disc) return 1;
     double di = i - g->ci, dj = j - g->cj, rr = g->r * (1.0 + SNAP);
     return di * di + dj * dj <= rr * rr;
@@ -236,6 +314,31 @@ static int geom_init(const drape_scene *s, geom *g, drape_error *err)
         double c_len = (double)nb, c_w = 0.5 * (double)(nw - 1);
         double lo_len = c_len - back / sp, hi_len = c_len + ov / sp;
         double lo_w = c_w - 0.5 * s->width / sp, hi_w = c_w + 0.5 * s->width / sp;
+        if (s->strip_oblique) { /* issue 18: the rotated rectangle */
+            double a = s->strip_angle * 3.14159265358979323846 / 180.0;
+            g->rot = 1;
+            g->rs = sin(a);
+            g->rc = cos(a);
+            g->lo[0] = -back / sp; g->hi[0] = ov / sp;
+            g->lo[1] = -0.5 * s->width / sp; g->hi[1] = 0.5 * s->width / sp;
+            double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+            for (int k = 0; k < 4; k++) {
+                double X = k & 1 ? g->hi[0] : g->lo[0], Y = k & 2 ? g->hi[1] : g->lo[1];
+                double u = X * g->rs - Y * g->rc, v = X * g->rc + Y * g->rs;
+                umin = fmin(umin, u); umax = fmax(umax, u);
+                vmin = fmin(vmin, v); vmax = fmax(vmax, v);
+            }
+            if (!(umax - umin < (double)MAX_GRID_POINTS && vmax - vmin < (double)MAX_GRID_POINTS)) {
+                ni = -1;
+                break;
+            }
+            double i0 = floor(umin - SNAP), j0 = floor(vmin - SNAP);
+            g->ci = -i0;
+            g->cj = -j0;
+            ni = (long)(ceil(umax + SNAP) - i0) + 1;
+            nj = (long)(ceil(vmax + SNAP) - j0) + 1;
+            break;
+        }
         if (s->strip_dir == DRAPE_WARP) { /* j along +x, i along -y */
             g->swap = 1;
             ni = nw; nj = nlen;
@@ -389,9 +492,81 @@ static double uniform_pm1(uint64_t *state)
     return 2.0 * u - 1.0;
 }
 
-/* Elements (L2-L4).  With fill = 0 only counts; with fill = 1 stores into
- * the arrays (already sized by the counting pass). */
-static void build_elements(drape_lattice *L, const geom *g,
+/* Oblique strip (issue 18, L6): along a staircase edge some particles lack
+ * a neighbour in a yarn direction, so they carry no hinge in it, and some
+ * squares inside the strip lack a corner, so there is no twist cell: that
+ * area would bend and twist with no stiffness, a band about sigma wide
+ * along each free edge.  Each such area (the particle's cell inside the
+ * strip; the square's part inside the strip) is added to the weight of the
+ * nearest element of the same family along the same yarn (hinges) or
+ * next to it (cells), as masses are lumped (L1).  Weights may then exceed
+ * 1. */
+static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s)
+{
+    static const int step[2][2] = {{1, 0}, {0, 1}};
+    int *hid = drape_calloc((size_t)L->ni * L->nj * 2, sizeof(int));
+    int *qid = drape_calloc((size_t)L->ni * L->nj, sizeof(int));
+    if (!hid || !qid) { drape_free(hid); drape_free(qid); return -1; }
+    for (long k = 0; k < 2L * L->ni * L->nj; k++) hid[k] = -1;
+    for (long k = 0; k < (long)L->ni * L->nj; k++) qid[k] = -1;
+    for (int h = 0; h < L->n_hinges; h++) {
+        const drape_hinge *H = &L->hinges[h];
+        hid[2 * ((long)L->gj[H->mid] * L->ni + L->gi[H->mid]) + H->dir] = h;
+    }
+    for (int c = 0; c < L->n_cells; c++) {
+        int p = L->cells[c].p[0];
+        qid[(long)L->gj[p] * L->ni + L->gi[p]] = c;
+    }
+    for (int p = 0; p < L->n; p++) {
+        int i = L->gi[p], j = L->gj[p];
+        double a = cell_area(g, i, j);
+        for (int d = 0; d < 2 && L->n_hinges > 0; d++) {
+            if (hid[2 * ((long)j * L->ni + i) + d] >= 0 || a <= 0.0) continue;
+            for (int r = 1; r <= 2; r++) {
+                int got = -1;
+                for (int sg = -1; sg <= 1 && got < 0; sg += 2) {
+                    int ii = i + sg * r * step[d][0], jj = j + sg * r * step[d][1];
+                    if (grid_at(L, ii, jj) < 0) continue;
+                    got = hid[2 * ((long)jj * L->ni + ii) + d];
+                }
+                if (got >= 0) {
+                    drape_hinge *H = &L->hinges[got];
+                    double lam = H->length > 0.0 ? H->length : 1.0;
+                    H->weight += a * lam;
+                    break;
+                }
+            }
+        }
+    }
+    if (L->n_cells > 0) {
+        for (int j = -1; j < L->nj; j++)
+            for (int i = -1; i < L->ni; i++) {
+                if (i >= 0 && j >= 0 && qid[(long)j * L->ni + i] >= 0) continue;
+                double a = s->kind == DRAPE_SCENE_CANTILEVER ? rot_area(g, i, i + 1.0, j, j + 1.0, 1)
+                                                             : rot_area(g, i, i + 1.0, j, j + 1.0, 0);
+                if (a <= SNAP) continue;
+                /* the nearest cell: rings of growing radius, nearest first */
+                int done = 0;
+                for (int r = 1; r <= 3 && !done; r++)
+                    for (int d2 = 1; d2 <= 2 * r * r && !done; d2++)
+                        for (int dj = -r; dj <= r && !done; dj++)
+                            for (int di = -r; di <= r && !done; di++) {
+                                if (di * di + dj * dj != d2) continue;
+                                int ii = i + di, jj = j + dj;
+                                if (ii < 0 || jj < 0 || ii >= L->ni || jj >= L->nj) continue;
+                                int c = qid[(long)jj * L->ni + ii];
+                                if (c >= 0) { L->cells[c].weight += a; done = 1; }
+                            }
+            }
+    }
+    drape_free(hid);
+    drape_free(qid);
+    return 0;
+}
+
+/* Elements (L2-L6).  With fill = 0 only counts; with fill = 1 stores into
+ * the arrays (already sized by the counting pass).  -1: out of memory. */
+static int build_elements(drape_lattice *L, const geom *g,
                            const drape_scene *s, int want_cells, int fill)
 {
     int want_edges = (s->terms & DRAPE_TERM_STRETCH) || s->damping_edge > 0.0;
@@ -432,11 +607,30 @@ static void build_elements(drape_lattice *L, const geom *g,
                  * clamped particle, along the strip, stands for its
                  * overhanging half [0, sigma/2] only: half the area, and
                  * its turning psi is spread over sigma/2 (K = 2 psi/sigma) */
-                if (s->kind == DRAPE_SCENE_CANTILEVER && L->fixed[p]
+                if (s->kind == DRAPE_SCENE_CANTILEVER && !g->rot && L->fixed[p]
                     && L->fixed[a] != L->fixed[b]
                     && fabs(L->x0[3 * a] - L->x0[3 * b]) > L->sigma) {
                     h->weight *= CLAMP_HINGE_FRACTION;
                     h->length = CLAMP_HINGE_FRACTION;
+                }
+                /* oblique strip (issue 18, L3'): the same rule for yarns
+                 * that cross the platform edge x = 0 at an angle: the
+                 * hinge stands for the part of its vertex interval
+                 * [-sigma/2, sigma/2] (along its yarn) beyond the edge,
+                 * lambda = (x_p + sigma |g| / 2) / (sigma |g|) in [0, 1],
+                 * g = dx/ds along the yarn; an interval wholly on the
+                 * platform keeps CLAMP_HINGE_MIN (a stiff hinge: the yarn
+                 * stays straight up to the edge) */
+                if (s->kind == DRAPE_SCENE_CANTILEVER && g->rot &&
+                    (L->fixed[a] || L->fixed[p] || L->fixed[b])) {
+                    double gx = fabs(L->x0[3 * b] - L->x0[3 * a]) / (2.0 * L->sigma);
+                    double lam = gx > 1e-12
+                                     ? (L->x0[3 * p] + 0.5 * L->sigma * gx) / (L->sigma * gx)
+                                     : 1.0;
+                    if (lam > 1.0) lam = 1.0;
+                    if (lam < CLAMP_HINGE_MIN) lam = CLAMP_HINGE_MIN;
+                    h->weight *= lam;
+                    h->length = lam;
                 }
             }
             nh++;
@@ -460,10 +654,16 @@ static void build_elements(drape_lattice *L, const geom *g,
             if (q[1] < 0 || q[2] < 0 || q[3] < 0) continue;
             if (L->fixed[q[0]] && L->fixed[q[1]] && L->fixed[q[2]] && L->fixed[q[3]])
                 continue;
+            /* an oblique cantilever's squares count only their part beyond
+             * the platform edge (on the platform nothing twists) */
+            double wq = frac(g->rot && s->kind == DRAPE_SCENE_CANTILEVER
+                                 ? rot_area(g, i, i + 1.0, j, j + 1.0, 1)
+                                 : spec_area(g, i, i + 1.0, j, j + 1.0), 1.0);
+            if (!(wq > SNAP)) continue;
             if (fill) {
                 drape_cell *k = &L->cells[nq];
                 memcpy(k->p, q, sizeof q);
-                k->weight = frac(spec_area(g, i, i + 1.0, j, j + 1.0), 1.0);
+                k->weight = wq;
             }
             nq++;
         }
@@ -472,6 +672,8 @@ static void build_elements(drape_lattice *L, const geom *g,
     L->n_hinges = nh;
     L->n_corners = nc;
     L->n_cells = nq;
+    if (fill && g->rot) return lump_edge_areas(L, g, s);
+    return 0;
 }
 
 static double nominal_area(const drape_scene *s)
@@ -533,7 +735,11 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
             double *x = L->x0 + 3 * p;
             L->gi[p] = i;
             L->gj[p] = j;
-            if (g.swap) {
+            if (g.rot) {
+                rot_xy(&g, i, j, &x[0], &x[1]);
+                x[0] *= L->sigma;
+                x[1] *= L->sigma;
+            } else if (g.swap) {
                 x[0] = (j - g.cj) * L->sigma;
                 x[1] = -(i - g.ci) * L->sigma;
             } else {
@@ -592,7 +798,7 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
         L->cells = drape_calloc((size_t)L->n_cells, sizeof *L->cells);
         if (!L->cells) goto nomem;
     }
-    build_elements(L, &g, s, want_cells, 1);
+    if (build_elements(L, &g, s, want_cells, 1) != 0) goto nomem;
     rc = 0;
     goto out;
 
@@ -632,7 +838,7 @@ int drape_lattice_estimate(const drape_scene *s, long *ni, long *nj,
     geom g;
     if (!s || geom_init(s, &g, NULL) != 0) return -1;
     long n = 0;
-    if (g.disc) {
+    if (g.disc || g.rot) {
         for (int j = 0; j < g.nj; j++)
             for (int i = 0; i < g.ni; i++) n += is_kept(&g, i, j);
     } else {
@@ -649,6 +855,8 @@ int drape_lattice_estimate(const drape_scene *s, long *ni, long *nj,
 static int bad_id(const drape_lattice *L, int p) { return p < 0 || p >= L->n; }
 
 static int bad_weight(double w) { return !(w > 0.0 && w <= 1.0); }
+/* hinges and cells of an oblique strip may carry lumped edge area (L6) */
+static int bad_lumped_weight(double w) { return !(w > 0.0 && w <= 8.0); }
 
 /* 1 unless q is the neighbour of p at step (di, dj) in the grid and at
  * distance sigma in the rest state. */
@@ -752,7 +960,7 @@ int drape_lattice_check(const drape_lattice *L)
             continue;
         }
         /* length 0 stands for 1 (lattice.h) */
-        if (bad_weight(H->weight) || (H->length != 0.0 && bad_weight(H->length)))
+        if (bad_lumped_weight(H->weight) || (H->length != 0.0 && bad_weight(H->length)))
             bad++;
         if (L->fixed[H->prev] && L->fixed[H->mid] && L->fixed[H->next]) bad++;
     }
@@ -785,7 +993,7 @@ int drape_lattice_check(const drape_lattice *L)
         if (bad_neighbour(L, Q->p[0], Q->p[1], 1, 0) || bad_neighbour(L, Q->p[1], Q->p[2], 0, 1) ||
             bad_neighbour(L, Q->p[3], Q->p[2], 1, 0) || bad_neighbour(L, Q->p[0], Q->p[3], 0, 1))
             bad++;
-        if (bad_weight(Q->weight)) bad++;
+        if (bad_lumped_weight(Q->weight)) bad++;
         for (int k = 0; k < 4; k++) nfix += L->fixed[Q->p[k]];
         if (nfix == 4) bad++;
     }

@@ -55,7 +55,6 @@ const char *const drape_method_names[] = {"default", "dynamic", "static", "fall"
 const char *const drape_term_names[] = {"stretch", "bend", "shear", "gravity", "bias",
                                         NULL};
 static const char *const table_shape_names[] = {"square", "round", NULL};
-static const char *const dir_names[] = {"weft", "warp", NULL}; /* = drape_dir */
 
 const char *drape_scene_kind_name(drape_scene_kind k)
 {
@@ -402,6 +401,45 @@ static int parse_fabric(const scene_ctx *c, const drape_ynode *root,
     return 0;
 }
 
+/* specimen.direction of a strip: warp, weft, bias (45 degrees) or an
+ * angle from the warp in [0, 90] degrees (a plain number is degrees; a
+ * quantity may say deg or rad).  0 and 90 are the warp and weft strips. */
+static int parse_direction(const scene_ctx *c, const drape_ynode *v, drape_scene *s)
+{
+    const char *path = "specimen.direction";
+    if (want_scalar(c, v, path, "warp, weft, bias or an angle from the warp in degrees"))
+        return -1;
+    double deg;
+    char *end;
+    if (strcmp(v->scalar, "bias") == 0) {
+        deg = 45.0;
+    } else if (strcmp(v->scalar, "warp") == 0 || strcmp(v->scalar, "weft") == 0) {
+        deg = strcmp(v->scalar, "warp") == 0 ? 0.0 : 90.0;
+    } else {
+        deg = strtod(v->scalar, &end);
+        if (end == v->scalar || *end) { /* a quantity with an angle unit */
+            double rad;
+            char why[160];
+            if (drape_units_parse(v->scalar, DRAPE_DIM_NONE, &rad, why, sizeof why) != 0)
+                return drape_ynode_error(c->err, c->doc, v, path, DRAPE_E_INPUT,
+                                         "expected warp, weft, bias or an angle from the warp "
+                                         "(22.5, 22.5 deg), got \"%s\"", v->scalar);
+            deg = rad * 180.0 / 3.14159265358979323846;
+        }
+    }
+    if (!(deg >= 0.0 && deg <= 90.0))
+        return drape_ynode_error(c->err, c->doc, v, path, DRAPE_E_INPUT,
+                                 "the strip's angle from the warp must be in [0, 90] degrees "
+                                 "(the fabric is symmetric about its yarns), got \"%s\"",
+                                 v->scalar);
+    s->strip_oblique = 0;
+    s->strip_angle = deg;
+    if (deg == 0.0) s->strip_dir = DRAPE_WARP;
+    else if (deg == 90.0) s->strip_dir = DRAPE_WEFT;
+    else s->strip_oblique = 1;
+    return 0;
+}
+
 static int parse_specimen(const scene_ctx *c, const drape_ynode *root,
                           drape_scene *s)
 {
@@ -483,12 +521,9 @@ static int parse_specimen(const scene_ctx *c, const drape_ynode *root,
                          "length", Q_POSITIVE, "width: 2.5 cm", &s->width,
                          NULL))
             return -1;
-        if ((v = drape_ynode_get(m, "direction", NULL)) != NULL) {
-            int d;
-            if (parse_enum(c, v, "specimen.direction", dir_names, &d))
-                return -1;
-            s->strip_dir = (drape_dir)d;
-        }
+        if ((v = drape_ynode_get(m, "direction", NULL)) != NULL &&
+            parse_direction(c, v, s))
+            return -1;
         break;
     }
     return 0;

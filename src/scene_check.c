@@ -77,7 +77,13 @@ static void grid_size(const drape_scene *s, double *ni, double *nj,
         *np = *ni * *nj;
         break;
     case DRAPE_SHAPE_STRIP:
-        if (s->strip_dir == DRAPE_WARP) {
+        if (s->strip_oblique) { /* the rotated rectangle's bounding box */
+            double a = s->strip_angle * SCENE_PI / 180.0;
+            double sa = fabs(sin(a)), ca = fabs(cos(a));
+            *ni = floor((s->length * sa + s->width * ca) / sp) + 3.0;
+            *nj = floor((s->length * ca + s->width * sa) / sp) + 3.0;
+            *np = s->length * s->width / (sp * sp) + 2.0 * (s->length + s->width) / sp;
+        } else if (s->strip_dir == DRAPE_WARP) {
             *ni = grid_count(s->width, sp);
             *nj = grid_count(s->length, sp);
         } else {

@@ -16,13 +16,17 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "drape/drape.h"
+#include "drape/equilibrium.h"
 #include "drape/fabric.h"
 #include "drape/fit.h"
 #include "drape/lattice.h"
 #include "drape/model.h"
 #include "drape/scene.h"
 #include "drape/units.h"
+#include "elastica.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -470,6 +474,239 @@ START_TEST(test_bias_uniform_twist)
 }
 END_TEST
 
+/* ------------------------------------------------ specimen.direction */
+
+START_TEST(test_scene_direction)
+{
+    char cwd[2048], fab[4096];
+    ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
+    snprintf(fab, sizeof fab, "%s/%s", cwd, tu_src("fabrics/cotton-poly-wang.yaml"));
+    static const struct {
+        const char *dir;
+        int ok, oblique;
+        double deg;
+        int strip_dir;
+    } cases[] = {{"warp", 1, 0, 0.0, DRAPE_WARP},     {"weft", 1, 0, 90.0, DRAPE_WEFT},
+                 {"bias", 1, 1, 45.0, 0},             {"22.5", 1, 1, 22.5, 0},
+                 {"67.5 deg", 1, 1, 67.5, 0},         {"0", 1, 0, 0.0, DRAPE_WARP},
+                 {"90", 1, 0, 90.0, DRAPE_WEFT},      {"0.5 rad", 1, 1, 28.64788975654116, 0},
+                 {"95", 0, 0, 0, 0},                  {"-10", 0, 0, 0, 0},
+                 {"diagonal", 0, 0, 0, 0},            {"5 cm", 0, 0, 0, 0}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char text[8192];
+        snprintf(text, sizeof text,
+                 "scene: cantilever\nfabric: %s\n"
+                 "specimen: {shape: strip, length: 20 cm, width: 2.5 cm, direction: %s}\n"
+                 "overhang: 6 cm\nspacing: 0.25 cm\nend: {t_max: 20 s}\n", fab, cases[k].dir);
+        const char *p = tu_write_file("dir.yaml", text);
+        drape_scene s;
+        drape_error err;
+        drape_error_clear(&err);
+        int rc = drape_scene_load(p, &s, &err, NULL, NULL);
+        if (!cases[k].ok) {
+            ck_assert_msg(rc != 0, "direction %s accepted", cases[k].dir);
+            ck_assert_int_eq(err.line, 3);
+            ck_assert_str_eq(err.key, "specimen.direction");
+            continue;
+        }
+        ck_assert_msg(rc == 0, "direction %s: %s", cases[k].dir, err.msg);
+        ck_assert_int_eq(s.strip_oblique, cases[k].oblique);
+        if (cases[k].oblique) ck_assert_close_rel(s.strip_angle, cases[k].deg, 1e-12);
+        else ck_assert_int_eq(s.strip_dir, cases[k].strip_dir);
+    }
+}
+END_TEST
+
+/* An oblique strip's lattice: masses sum to W x area, every particle lies
+ * in the rotated rectangle, the platform holds the particles at x <= 0,
+ * and the element areas are those of the strip (hinges of each family
+ * and the twist cells, lumped at the staircase edges, L6). */
+START_TEST(test_oblique_lattice)
+{
+    drape_fabric F;
+    load_fabric("fabrics/cotton-poly-wang.yaml", &F);
+    for (int k = 0; k < 3; k++) {
+        double deg = k == 0 ? 22.5 : k == 1 ? 45.0 : 71.0, sg = 0.0025;
+        drape_scene s;
+        memset(&s, 0, sizeof s);
+        strcpy(s.path, "test.yaml");
+        s.kind = DRAPE_SCENE_CANTILEVER;
+        s.shape = DRAPE_SHAPE_STRIP;
+        s.length = 0.2;
+        s.width = 0.025;
+        s.overhang = 0.06;
+        s.spacing = sg;
+        s.terms = DRAPE_TERM_ALL;
+        s.strip_oblique = 1;
+        s.strip_angle = deg;
+        drape_lattice *L = lattice(&s, &F);
+        ck_assert_close_rel(L->mass_total, F.weight * 0.2 * 0.025, 1e-9);
+        double a = deg * PI / 180.0, hw[2] = {0, 0}, cw = 0.0;
+        for (int p = 0; p < L->n; p++) {
+            double x = L->x0[3 * p], y = L->x0[3 * p + 1];
+            ck_assert(x >= -0.14 - 1e-9 && x <= 0.06 + 1e-9 && fabs(y) <= 0.0125 + 1e-9);
+            ck_assert_int_eq(L->fixed[p], x <= 1e-9 * sg);
+            /* the lattice's weft (i) direction is at 90 - deg from the strip */
+            double u = x * sin(a) - y * cos(a), v = x * cos(a) + y * sin(a);
+            ck_assert_close_abs(u / sg - round(u / sg), 0.0, 1e-9);
+            ck_assert_close_abs(v / sg - round(v / sg), 0.0, 1e-9);
+        }
+        for (int h = 0; h < L->n_hinges; h++) {
+            const drape_hinge *H = &L->hinges[h];
+            if (!L->fixed[H->prev] && !L->fixed[H->mid] && !L->fixed[H->next])
+                hw[H->dir] += H->weight * sg * sg;
+        }
+        for (int c = 0; c < L->n_cells; c++) cw += L->cells[c].weight * sg * sg;
+        /* the free part of the strip is 6 x 2.5 cm: the cells cover it; the
+         * hinges with no clamped particle cover it but for a band of about
+         * 1.5 sigma at the platform */
+        ck_assert_close_rel(cw, 0.06 * 0.025, 1e-9);
+        for (int d = 0; d < 2; d++)
+            ck_assert_msg(hw[d] > 0.025 * (0.06 - 3.0 * sg) && hw[d] < 0.06 * 0.025,
+                          "%g deg: hinge area %g (direction %d)", deg, hw[d], d);
+        drape_lattice_free(L);
+    }
+}
+END_TEST
+
+/* ------------------------------------------- the cantilever at any angle */
+
+/* The bending energy per area of the plate form (docs/model.md) for
+ * cylindrical bending with curvature k in the direction at angle a from
+ * the warp, formed here from the three measured curves. */
+static double w_dir(const drape_fabric *F, double a, double k)
+{
+    double s = sin(a), c = cos(a), t = fabs(k * s * c);
+    const drape_fit *bw = &F->bend[DRAPE_WARP], *bf = &F->bend[DRAPE_WEFT];
+    return drape_fit_integral(bf, k * s * s) + drape_fit_integral(bw, k * c * c) +
+           drape_fit_integral(&F->bend_bias, 2.0 * t) - drape_fit_integral(bw, t) -
+           drape_fit_integral(bf, t);
+}
+
+/* A strip cut at angle a bends with curvature kappa along its length; a
+ * narrow strip may turn the direction in which it bends by psi (its
+ * generators then cross it obliquely, and it twists): curvature
+ * kappa / cos^2 psi in the direction a + psi.  Its energy per area is the
+ * least over psi (psi = 0 at 0, 45 and 90 degrees by symmetry). */
+static double w_strip(const drape_fabric *F, double a, double kappa, int rotate)
+{
+    if (!rotate) return w_dir(F, a, kappa);
+    double best = INFINITY, at = 0.0;
+    for (int k = -18; k <= 18; k++) { /* 2.5-degree scan, then golden section */
+        double psi = k * PI / 72.0, v = w_dir(F, a + psi, kappa / (cos(psi) * cos(psi)));
+        if (v < best) { best = v; at = psi; }
+    }
+    double lo = at - PI / 72.0, hi = at + PI / 72.0, gr = 0.5 * (sqrt(5.0) - 1.0);
+    for (int it = 0; it < 60; it++) {
+        double p1 = hi - gr * (hi - lo), p2 = lo + gr * (hi - lo);
+        double v1 = w_dir(F, a + p1, kappa / (cos(p1) * cos(p1)));
+        double v2 = w_dir(F, a + p2, kappa / (cos(p2) * cos(p2)));
+        if (v1 < v2) hi = p2;
+        else lo = p1;
+    }
+    double psi = 0.5 * (lo + hi);
+    double v = w_dir(F, a + psi, kappa / (cos(psi) * cos(psi)));
+    return v < best ? v : best;
+}
+
+#define MT_N 8001
+#define MT_DK 0.025 /* 1/m: the table reaches 200 1/m */
+typedef struct mtable {
+    double m[MT_N];
+} mtable;
+
+/* M(K) = dW/dK tabulated by central differences of w_strip */
+static void mtable_fill(mtable *t, const drape_fabric *F, double a, int rotate)
+{
+    double h = 0.2 * MT_DK;
+    t->m[0] = 0.0;
+    for (int k = 1; k < MT_N; k++) {
+        double K = k * MT_DK;
+        t->m[k] = (w_strip(F, a, K + h, rotate) - w_strip(F, a, K - h, rotate)) / (2.0 * h);
+    }
+}
+
+static double mtable_eval(double K, void *ctx)
+{
+    const mtable *t = ctx;
+    double sg = K < 0 ? -1.0 : 1.0, u = fabs(K) / MT_DK;
+    int i = (int)u;
+    if (i >= MT_N - 1) i = MT_N - 2;
+    double f = u - i;
+    return sg * (t->m[i] * (1.0 - f) + t->m[i + 1] * f);
+}
+
+/* The strip of scenes/cantilever.yaml (20 x 2.5 cm, 6 cm over the edge)
+ * cut at `deg` from the warp, fabric cotton-poly-wang, all five terms
+ * (shear holds an oblique strip in its plane: without it the lattice's
+ * squares shear freely), spacing sg, static solution. */
+static void cantilever_at(double deg, double sg, drape_cantilever *c, double *x_tip_ref,
+                          double *drop_ref, double *chord_cyl)
+{
+    drape_fabric F;
+    load_fabric("fabrics/cotton-poly-wang.yaml", &F);
+    drape_scene s;
+    memset(&s, 0, sizeof s);
+    strcpy(s.path, "test.yaml");
+    s.kind = DRAPE_SCENE_CANTILEVER;
+    s.shape = DRAPE_SHAPE_STRIP;
+    s.length = 0.2;
+    s.width = 0.025;
+    s.overhang = 0.06;
+    s.spacing = sg;
+    s.terms = DRAPE_TERM_ALL;
+    s.strip_dir = deg == 90.0 ? DRAPE_WEFT : DRAPE_WARP;
+    s.strip_oblique = deg > 0.0 && deg < 90.0;
+    s.strip_angle = deg;
+    drape_lattice *L = lattice(&s, &F);
+    drape_model *m = model(L, &F, DRAPE_TERM_ALL);
+    drape_equilibrium_opts eo;
+    drape_equilibrium_opts_from_fabric(&eo, &F);
+    drape_equilibrium_result er;
+    drape_error err;
+    drape_error_clear(&err);
+    ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &eo, &er, &err) == 0, "%s", err.msg);
+    ck_assert_msg(er.certified == 1, "%g deg: not a certified minimum", deg);
+    ck_assert_msg(er.status == DRAPE_EQ_CONVERGED || er.max_force_rel < 1e-7,
+                  "%g deg: %s, residual %g", deg, drape_equilibrium_status_name(er.status),
+                  er.max_force_rel);
+    ck_assert_int_eq(drape_cantilever_measure(L, er.x, F.weight, DRAPE_G_STANDARD, c, &err), 0);
+    /* the reference: the heavy elastica with the strip's curve, at the arc
+     * length of the particles the tip is the mean of */
+    static mtable t;
+    double w = F.weight * DRAPE_G_STANDARD, a = deg * PI / 180.0, xr, dr;
+    mtable_fill(&t, &F, a, 1);
+    for (int k = 1; k < MT_N; k++) ck_assert(t.m[k] > t.m[k - 1]);
+    ck_assert_int_eq(elastica_curve_point(s.overhang, w, mtable_eval, &t, c->overhang_m, &xr, &dr), 0);
+    *x_tip_ref = xr;
+    *drop_ref = dr;
+    mtable_fill(&t, &F, a, 0);
+    ck_assert_int_eq(elastica_curve_point(s.overhang, w, mtable_eval, &t, c->overhang_m, &xr, &dr), 0);
+    *chord_cyl = atan2(dr, xr) * 180.0 / PI;
+    drape_equilibrium_result_free(&er);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+
+START_TEST(test_cantilever_angles)
+{
+    static const double deg[5] = {0.0, 22.5, 45.0, 67.5, 90.0};
+    for (int k = 0; k < 5; k++) {
+        drape_cantilever c;
+        double xr, dr, ccyl;
+        cantilever_at(deg[k], 0.0025, &c, &xr, &dr, &ccyl);
+        double drop = -c.tip_m[2], e = drop / dr - 1.0;
+        if (getenv("CHECK_BIAS_VERBOSE"))
+            printf("cantilever %5.1f deg: chord %.3f deg (elastica %.3f; without turning %.3f), "
+                   "drop %.3f mm (elastica %.3f), rel err %+.4f\n",
+                   deg[k], c.tip_angle_deg, atan2(dr, xr) * 180 / PI, ccyl, drop * 1e3,
+                   dr * 1e3, e);
+        ck_assert_msg(fabs(e) < 0.01, "%g deg: tip drop %.6g m, elastica %.6g m (%+.3g %%)",
+                      deg[k], drop, dr, 100 * e);
+    }
+}
+END_TEST
+
 Suite *bias_suite(void)
 {
     Suite *s = suite_create("bias");
@@ -481,6 +718,9 @@ Suite *bias_suite(void)
     tcase_add_test(tc, test_bias_fd);
     tcase_add_test(tc, test_bias_cylinder);
     tcase_add_test(tc, test_bias_uniform_twist);
+    tcase_add_test(tc, test_scene_direction);
+    tcase_add_test(tc, test_oblique_lattice);
+    tcase_add_test(tc, test_cantilever_angles);
     suite_add_tcase(s, tc);
     return s;
 }

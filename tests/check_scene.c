@@ -720,10 +720,11 @@ START_TEST(test_bad_names)
                  "table: {shape: oval, diameter: 30 cm}\n"
                  "spacing: 2 cm\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 16, "table.shape", "square, round");
+    /* bias and angles are accepted since issue 18 (tests/check_bias.c) */
     expect_error("scene: cantilever\nfabric: @F\n"
-                 "specimen: {length: 20 cm, width: 2 cm, direction: bias}\n"
+                 "specimen: {length: 20 cm, width: 2 cm, direction: diagonal}\n"
                  "overhang: 6 cm\nspacing: 5 mm\nend: {t_max: 5 s}\n",
-                 DRAPE_E_INPUT, 3, 51, "specimen.direction", "weft, warp");
+                 DRAPE_E_INPUT, 3, 51, "specimen.direction", "warp, weft, bias or an angle");
     /* shape must suit the scene */
     expect_error("scene: cusick\nfabric: @F\n"
                  "specimen: {shape: rectangle, width: 30 cm, height: 30 cm}\n"

@@ -229,6 +229,93 @@ int elastica_shape(double gamma, int n, double *x, double *drop)
     return 0;
 }
 
+/* ---- nonlinear moment curve ---- */
+
+typedef struct curve_ctx {
+    double L, w;
+    elastica_moment_fn M;
+    void *mctx;
+    int failed;
+    double s_at, x_at, d_at;
+} curve_ctx;
+
+/* K with M(K) = m (M odd and increasing): bracket, then bisection to
+ * 1e-14 relative. */
+static double curve_k(const curve_ctx *c, double m)
+{
+    if (m == 0.0) return 0.0;
+    double sg = m < 0 ? -1.0 : 1.0, am = fabs(m), lo = 0.0, hi = 1.0;
+    while (c->M(hi, c->mctx) < am && hi < 1e9) { lo = hi; hi *= 2.0; }
+    for (int it = 0; it < 200 && hi - lo > 1e-14 * hi; it++) {
+        double mid = 0.5 * (lo + hi);
+        if (c->M(mid, c->mctx) < am) lo = mid;
+        else hi = mid;
+    }
+    return sg * 0.5 * (lo + hi);
+}
+
+static int curve_rhs(double s, const double y[], double dydt[], void *params)
+{
+    const curve_ctx *c = params;
+    dydt[0] = curve_k(c, y[1]);
+    dydt[1] = -c->w * (c->L - s) * cos(y[0]);
+    dydt[2] = cos(y[0]);
+    dydt[3] = sin(y[0]);
+    return GSL_SUCCESS;
+}
+
+/* m(L) for m(0) = m0, with the same out-of-range rule as residual(). */
+static double curve_residual(double m0, void *params)
+{
+    enum { CHECKS = 128 };
+    curve_ctx *c = params;
+    gsl_odeiv2_system sys = {curve_rhs, NULL, 4, c};
+    gsl_odeiv2_driver *d = gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rkf45,
+                                                         1e-4 * c->L, 1e-11, 1e-11);
+    if (!d) { c->failed = 1; return NAN; }
+    double y[4] = {0.0, m0, 0.0, 0.0}, s = 0.0, big = c->w * c->L * c->L;
+    double r = NAN;
+    int done_at = 0;
+    for (int k = 1; k <= CHECKS; k++) {
+        double sk = c->L * k / CHECKS;
+        if (!done_at && c->s_at <= sk) {
+            if (c->s_at > s && gsl_odeiv2_driver_apply(d, &s, c->s_at, y) != GSL_SUCCESS) {
+                c->failed = 1;
+                break;
+            }
+            c->x_at = y[2];
+            c->d_at = y[3];
+            done_at = 1;
+        }
+        if (sk > s && gsl_odeiv2_driver_apply(d, &s, sk, y) != GSL_SUCCESS) {
+            c->failed = 1;
+            break;
+        }
+        if (y[0] > 0.5 * M_PI) { r = big; break; }
+        if (y[0] < 0.0) { r = -big; break; }
+        if (k == CHECKS) r = y[1];
+    }
+    gsl_odeiv2_driver_free(d);
+    return r;
+}
+
+int elastica_curve_point(double L, double w, elastica_moment_fn M, void *ctx, double s_at,
+                         double *x_at, double *drop_at)
+{
+    gsl_set_error_handler_off();
+    if (!(L > 0) || !(w > 0) || !(s_at > 0) || s_at > L * (1.0 + 1e-9)) return -1;
+    if (s_at > L) s_at = L;
+    curve_ctx c = {L, w, M, ctx, 0, s_at, NAN, NAN};
+    gsl_function f = {curve_residual, &c};
+    double m0;
+    if (brent(&f, 0.0, 0.5 * w * L * L, 1e-13 * w * L * L, &m0) != 0 || c.failed) return -1;
+    curve_residual(m0, &c);
+    if (c.failed || !isfinite(c.x_at)) return -1;
+    *x_at = c.x_at;
+    *drop_at = c.d_at;
+    return 0;
+}
+
 typedef struct chord_ctx {
     double target;
     int failed;

@@ -43,6 +43,17 @@ int elastica_gamma_for_chord(double chord, double *gamma);
  * theta the chord angle in rad. */
 double elastica_peirce_c_over_l(double theta);
 
+/* ---- heavy cantilever with a nonlinear moment curve (issue 18) --------
+ * The same strip in SI units: overhang L (m), weight w = W g per unit
+ * length and width (N/m^2), bending moment per width M(K) given by the
+ * caller (odd, increasing: N.m/m for K in 1/m).  State theta, the moment
+ * m (N.m/m), x, drop along s; theta' = K with M(K) = m, m' = -w (L - s)
+ * cos theta; shooting on m(0) as above.  The position at arc length
+ * s_at (0 < s_at <= L) goes to *x_at, *drop_at (m).  Returns 0 or -1. */
+typedef double (*elastica_moment_fn)(double K, void *ctx);
+int elastica_curve_point(double L, double w, elastica_moment_fn M, void *ctx, double s_at,
+                         double *x_at, double *drop_at);
+
 /* ---- elastic catenary --------------------------------------------------
  * A perfectly flexible cable (per unit width: weight w = W g per unit
  * unstretched length, N/m^2; linear stretch T = k eps, k in N/m) of

@@ -88,6 +88,9 @@ typedef struct drape_scene {
     double diameter;  /* circle, m */
     double length;    /* strip, m */
     drape_dir strip_dir; /* strip: material direction of its length */
+    int strip_oblique;   /* strip cut at an angle to the yarns (issue 18) */
+    double strip_angle;  /* with strip_oblique: angle of its length from the
+                            warp, degrees, in (0, 90) (`bias` = 45) */
 
     double support_diameter;       /* cusick, m (default 0.18) */
     drape_table_shape table_shape; /* table */
