@@ -474,6 +474,106 @@ START_TEST(test_bias_uniform_twist)
 }
 END_TEST
 
+/* ---------------------------------------- a square plate twisted at its corners */
+
+/* A free square plate of side a loaded by corner forces +P, -P, +P, -P
+ * (Kirchhoff; orthotropic, D12 = 0) twists uniformly: w = tau x y with
+ * tau = P / (4 D66), M_x = M_y = 0, the twisting moment constant; w_xxxx,
+ * w_xxyy, w_yyyy all vanish and every free-edge condition holds, so this
+ * is the exact solution, and its energy is 2 D66 tau^2 a^2.  Here the
+ * corners are displaced by +-delta (tau = 4 delta / a^2) on the linearised
+ * lattice (the Jacobian at the flat state: out-of-plane motion decouples
+ * from in-plane motion), the centre particle and one neighbour hold the
+ * rigid motions (the exact w is zero there), and the plate solution is
+ * compared with the lattice's: displacements, energy, corner force. */
+START_TEST(test_twisted_plate)
+{
+    drape_fabric F;
+    load_fabric("fabrics/cotton-poly-wang.yaml", &F);
+    double d66 = drape_fit_slope(&F.bend_bias, 0.0) -
+                 0.25 * (drape_fit_slope(&F.bend[DRAPE_WARP], 0.0) +
+                         drape_fit_slope(&F.bend[DRAPE_WEFT], 0.0));
+    drape_scene s;
+    rect_scene(&s, 0.1, 0.1, 0.1 / 14, DRAPE_TERM_ALL); /* 15 x 15 points */
+    drape_lattice *L = lattice(&s, &F);
+    drape_model *m = model(L, &F, DRAPE_TERM_ALL);
+    const drape_pattern *P = drape_model_pattern(m);
+    int n = L->n, N = (int)P->n;
+    double *K = calloc((size_t)P->nnz, sizeof(double));
+    ck_assert_int_eq(drape_model_jacobian(m, DRAPE_PART_BEND, L->x0, NULL, K, NULL), 0);
+    /* H = -K on the z coordinates (lattice free ids: every particle is free) */
+    ck_assert_int_eq(N, 3 * n);
+    double *H = calloc((size_t)n * n, sizeof(double));
+    for (int64_t j = 0; j < N; j++)
+        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++)
+            if (j % 3 == 2 && P->rowind[k] % 3 == 2)
+                H[(P->rowind[k] / 3) * n + j / 3] = -K[k];
+    double a = 0.1, delta = 1e-4, tau = 4.0 * delta / (a * a);
+    /* prescribed: corners (+-delta), the centre and its +x neighbour (0) */
+    double *z = calloc((size_t)n, sizeof(double));
+    unsigned char *fix = calloc((size_t)n, 1);
+    for (int p = 0; p < n; p++) {
+        double x = L->x0[3 * p], y = L->x0[3 * p + 1];
+        int corner = fabs(fabs(x) - 0.05) < 1e-9 && fabs(fabs(y) - 0.05) < 1e-9;
+        int centre = fabs(y) < 1e-9 && (fabs(x) < 1e-9 || fabs(x - 0.1 / 14) < 1e-9);
+        if (corner) z[p] = tau * x * y;
+        fix[p] = (unsigned char)(corner || centre);
+    }
+    /* solve H_ff z_f = -H_fc z_c by Gaussian elimination with pivoting */
+    int nf = 0, *id = malloc(sizeof(int) * (size_t)n);
+    for (int p = 0; p < n; p++) if (!fix[p]) id[nf++] = p;
+    double *A = calloc((size_t)nf * (nf + 1), sizeof(double));
+    for (int r = 0; r < nf; r++) {
+        double b = 0.0;
+        for (int q = 0; q < n; q++) if (fix[q]) b -= H[id[r] * n + q] * z[q];
+        for (int c = 0; c < nf; c++) A[r * (nf + 1) + c] = H[id[r] * n + id[c]];
+        A[r * (nf + 1) + nf] = b;
+    }
+    for (int c = 0; c < nf; c++) {
+        int piv = c;
+        for (int r = c + 1; r < nf; r++)
+            if (fabs(A[r * (nf + 1) + c]) > fabs(A[piv * (nf + 1) + c])) piv = r;
+        for (int k = 0; k <= nf; k++) {
+            double t = A[c * (nf + 1) + k];
+            A[c * (nf + 1) + k] = A[piv * (nf + 1) + k];
+            A[piv * (nf + 1) + k] = t;
+        }
+        ck_assert(fabs(A[c * (nf + 1) + c]) > 0.0);
+        for (int r = c + 1; r < nf; r++) {
+            double f = A[r * (nf + 1) + c] / A[c * (nf + 1) + c];
+            for (int k = c; k <= nf; k++) A[r * (nf + 1) + k] -= f * A[c * (nf + 1) + k];
+        }
+    }
+    for (int c = nf - 1; c >= 0; c--) {
+        double v = A[c * (nf + 1) + nf];
+        for (int k = c + 1; k < nf; k++) v -= A[c * (nf + 1) + k] * z[id[k]];
+        z[id[c]] = v / A[c * (nf + 1) + c];
+    }
+    /* the plate: w = tau x y everywhere, energy 2 D66 tau^2 a^2 */
+    double err = 0.0, E = 0.0;
+    for (int p = 0; p < n; p++)
+        err = fmax(err, fabs(z[p] - tau * L->x0[3 * p] * L->x0[3 * p + 1]));
+    for (int p = 0; p < n; p++)
+        for (int q = 0; q < n; q++) E += 0.5 * z[p] * H[p * n + q] * z[q];
+    if (getenv("CHECK_BIAS_VERBOSE"))
+        printf("twisted plate: max |w - tau x y| / delta %.2g, energy %.10g J (plate %.10g)\n",
+               err / delta, E, 2.0 * d66 * tau * tau * a * a);
+    ck_assert_msg(err < 1e-9 * delta, "displacements off the plate solution by %g m", err);
+    ck_assert_close_rel(E, 2.0 * d66 * tau * tau * a * a, 1e-9);
+    /* corner force of the plate, P = 4 D66 tau, from the lattice's stiffness */
+    for (int p = 0; p < n; p++) {
+        double x = L->x0[3 * p], y = L->x0[3 * p + 1];
+        if (!(fabs(fabs(x) - 0.05) < 1e-9 && fabs(fabs(y) - 0.05) < 1e-9)) continue;
+        double f = 0.0;
+        for (int q = 0; q < n; q++) f += H[p * n + q] * z[q];
+        ck_assert_close_rel(f, (x * y > 0 ? 1.0 : -1.0) * 4.0 * d66 * tau, 1e-9);
+    }
+    free(K); free(H); free(z); free(fix); free(id); free(A);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* ------------------------------------------------ specimen.direction */
 
 START_TEST(test_scene_direction)
@@ -718,6 +818,7 @@ Suite *bias_suite(void)
     tcase_add_test(tc, test_bias_fd);
     tcase_add_test(tc, test_bias_cylinder);
     tcase_add_test(tc, test_bias_uniform_twist);
+    tcase_add_test(tc, test_twisted_plate);
     tcase_add_test(tc, test_scene_direction);
     tcase_add_test(tc, test_oblique_lattice);
     tcase_add_test(tc, test_cantilever_angles);
