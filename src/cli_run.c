@@ -120,6 +120,12 @@ static const char run_usage[] =
     "                           (scene: solver.fall_time, fall_step; default\n"
     "                           10 and 1/32 pendulum times sqrt(h/g) of the free\n"
     "                           length h: 0.78 s and 2.4 ms for the Cusick test)\n"
+    "  --fall-swing X           the fall goes on past --fall-time while the\n"
+    "                           cloth still swings: while its kinetic energy over\n"
+    "                           the last fifth of the fall time exceeds X of its\n"
+    "                           peak, up to 4 fall times (scene:\n"
+    "                           solver.fall_swing; default 0.02; 0 = stop at the\n"
+    "                           fall time); result key fall_end_s\n"
     "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
     "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
     "  --seed N                 perturbation seed (of the first specimen)\n"
@@ -173,7 +179,9 @@ const char *const drape_cli_run_keys[] = {
     "energy_max_rise_J", "max_strain_peak", "energy_rescales",
     /* issue 18: the energy terms the model was built with, joined by `+`
      * (bias only where the fabric gives a bias curve) */
-    "terms", NULL};
+    "terms",
+    /* ninth session: when the fall ended (it goes on while the cloth swings) */
+    "fall_end_s", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -331,7 +339,7 @@ static const char *signal_name(int sig)
  * result as a run (status equilibrium or failed, no time, no integrator
  * statistics).  Frames: the final state only.  Returns 1 on success. */
 static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
-                      double fall_step, run_ctx *rc, drape_sim_result *res,
+                      double fall_step, double fall_swing, run_ctx *rc, drape_sim_result *res,
                       drape_equilibrium_result *er, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
@@ -339,6 +347,8 @@ static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
     drape_equilibrium_opts_from_fabric(&eo, f);
     eo.dyn_time = fall_time; /* the fall method: damped large-step dynamics first */
     eo.dyn_dt = fall_step;
+    eo.dyn_ke_frac = fall_swing; /* and on while the cloth still swings */
+    eo.dyn_time_max = DRAPE_FALL_TIME_MAX * fall_time;
     /* after a fall a limp cloth can still be far from rest: the settling
      * may need more than the static method's iterations (measured: a
      * ponte-roma specimen, 704) */
@@ -461,6 +471,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->has_seed) s.perturb_seed = ra->seed;
     if (ra->fall_time > 0) s.fall_time = ra->fall_time;
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
+    if (ra->fall_swing >= 0) s.fall_swing = ra->fall_swing;
     if (ra->substeps > 0) s.substeps = ra->substeps;
     if (ra->terms) s.terms = ra->terms;
     if (ri && ri->fixed_step > 0.0) { /* animate's step (its --substeps) */
@@ -515,7 +526,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.frame = ri ? ri->frames : 0;
 
     if (method_static) {
-        sim_ok = run_static(m, &f, fall_time, fall_step, &rc, &res, &er, &err);
+        sim_ok = run_static(m, &f, fall_time, fall_step, drape_scene_fall_swing(&s), &rc, &res,
+                            &er, &err);
         if (stop_signal) { /* the solve stops at its next iteration */
             interrupted = 1;
             res.status = DRAPE_SIM_INTERRUPTED;
@@ -691,6 +703,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         snprintf(terms + len, sizeof terms - len, "%s%s", len ? "+" : "", drape_term_names[k]);
     }
     drape_cli_result_str(&r, "terms", terms);
+    drape_cli_result_num(&r, "fall_end_s", method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_end : NAN);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");
@@ -814,7 +827,7 @@ int drape_cli_run(int argc, char **argv)
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
            O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
-           O_TERMS };
+           O_TERMS, O_FALLSWING };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -834,6 +847,7 @@ int drape_cli_run(int argc, char **argv)
         {"jobs", required_argument, NULL, 'j'},
         {"seed", required_argument, NULL, O_SEED},
         {"terms", required_argument, NULL, O_TERMS},
+        {"fall-swing", required_argument, NULL, O_FALLSWING},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"substeps", required_argument, NULL, O_SUBSTEPS},
@@ -850,6 +864,7 @@ int drape_cli_run(int argc, char **argv)
     int method = DRAPE_METHOD_DEFAULT, linsol = 0;
     run_args ra;
     memset(&ra, 0, sizeof ra);
+    ra.fall_swing = -1.0;
     ra.jobs = 0; /* one per core */
     while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
         switch (c) {
@@ -908,6 +923,14 @@ int drape_cli_run(int argc, char **argv)
                 return usage_error("--seed: expected a non-negative integer, got `%s'%s", optarg, "");
             ra.has_seed = 1;
             ra.seed = v;
+            break;
+        }
+        case O_FALLSWING: {
+            char *end;
+            ra.fall_swing = strtod(optarg, &end);
+            if (*end || end == optarg || !(ra.fall_swing >= 0.0 && ra.fall_swing < 1.0))
+                return usage_error("--fall-swing: expected a fraction in [0, 1), got `%s'%s",
+                                   optarg, "");
             break;
         }
         case O_TERMS: {

@@ -487,7 +487,8 @@ static void work_free(eq_work *w)
  * K, D at (x0, v_n).  Runs for time T (it follows the physical fall, with
  * inertia, into the basin that the dynamic run would reach).  Returns 0, 1
  * (folded or too small a step), 2 (stop raised) or -1 (err set). */
-static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps,
+static int damped_dynamics(eq_work *w, double *x, double T, double h, double ke_frac,
+                           double T_max, int *steps, double *t_end,
                            const volatile sig_atomic_t *stop, drape_error *err)
 {
     unsigned parts_all = drape_model_parts(w->m);
@@ -496,12 +497,31 @@ static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps
     size_t n3 = 3 * (size_t)L->n;
     double *xp = w->xz, *vp = w->fz, *x0 = w->xt, *v = w->vel;  /* previous step, trial */
     memset(v, 0, sizeof(double) * n3);
-    double t = 0.0;
+    double t = 0.0, ke_peak = 0.0, ke_win = 0.0;
+    /* the kinetic energy's largest value over the last KE_WINDOW steps
+     * (a fifth of T: two pendulum times of the Cusick fall), so that a
+     * swing's turning point does not end the fall */
+    enum { KE_WINDOW_MAX = 1024 };
+    double ring[KE_WINDOW_MAX];
+    int nwin = (int)ceil(0.2 * T / h), iw = 0;
+    if (nwin < 1) nwin = 1;
+    if (nwin > KE_WINDOW_MAX) nwin = KE_WINDOW_MAX;
+    for (int k = 0; k < nwin; k++) ring[k] = INFINITY;
     int have_prev = 0;
     *steps = 0;
-    while (t < T * (1.0 - 1e-12)) {
+    for (;;) {
+        /* past T, go on (whole steps, the last one cut at T_max) while the
+         * cloth still swings */
+        int extend = 0;
+        if (t >= T * (1.0 - 1e-12)) {
+            if (!(ke_frac > 0.0) || ke_win <= ke_frac * ke_peak || t >= T_max * (1.0 - 1e-12))
+                break;
+            extend = 1;
+        }
         if (stop && *stop) return 2;
-        double hs = h < T - t ? h : T - t;
+        double rem = (extend ? T_max : T) - t;
+        double hs = rem > h * (1.0 - 1e-9) ? h : rem; /* a whole step when the rest is h
+                                                        but for rounding: no BDF1 restart */
         int bdf2 = have_prev;
         double b = bdf2 ? 2.0 / 3.0 : 1.0, bh = b * hs;
         /* predictor x0 = xh + b h v_n; the free part of M (vh - v_n) */
@@ -555,7 +575,20 @@ static int damped_dynamics(eq_work *w, double *x, double T, double h, int *steps
         have_prev = hs == h;
         t += hs;
         (*steps)++;
+        if (ke_frac > 0.0) {
+            double ke = 0.0;
+            for (int p = 0; p < w->nf; p++) {
+                const double *vp_ = v + 3 * (long)L->free_to_id[p];
+                ke += 0.5 * w->mrow[3 * p] * (vp_[0] * vp_[0] + vp_[1] * vp_[1] + vp_[2] * vp_[2]);
+            }
+            if (ke > ke_peak) ke_peak = ke;
+            ring[iw] = ke;
+            iw = (iw + 1) % nwin;
+            ke_win = 0.0;
+            for (int k = 0; k < nwin; k++) if (ring[k] > ke_win) ke_win = ring[k];
+        }
     }
+    *t_end = t;
     return 0;
 }
 
@@ -613,6 +646,8 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         !(o.clamp_k[1] >= 0.0) || !isfinite(o.clamp_k[0]) || !isfinite(o.clamp_k[1]) ||
         !(o.dyn_time >= 0.0) || !isfinite(o.dyn_time) ||
         (o.dyn_time > 0.0 && !(o.dyn_dt > 0.0 && isfinite(o.dyn_dt))) || !(o.dt0 >= 0.0) ||
+        !(o.dyn_ke_frac >= 0.0 && o.dyn_ke_frac < 1.0) ||
+        !(o.dyn_time_max >= 0.0) || !isfinite(o.dyn_time_max) ||
         !(o.dt_growth_max >= 1.0) || !(o.dt_growth_min >= 1.0) ||
         o.dt_growth_min > o.dt_growth_max || !(o.dt_newton >= 0.0) ||
         o.eig_iters < 0 || !(o.force_ref >= 0.0) || !isfinite(o.force_ref) ||
@@ -678,7 +713,9 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
     }
 
     if (o.dyn_time > 0.0) {
-        int rcd = damped_dynamics(&w, x, o.dyn_time, o.dyn_dt, &r->dyn_steps, o.stop, err);
+        double tmax = o.dyn_time_max > 0.0 ? o.dyn_time_max : 4.0 * o.dyn_time;
+        int rcd = damped_dynamics(&w, x, o.dyn_time, o.dyn_dt, o.dyn_ke_frac, tmax,
+                                  &r->dyn_steps, &r->dyn_end, o.stop, err);
         if (rcd < 0) goto out;
         if (rcd == 1 || eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
             drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,

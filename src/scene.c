@@ -753,11 +753,12 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
 {
     static const char *const keys[] = {"integrator", "rtol", "atol",
                                        "max_order", "method", "fall_time",
-                                       "fall_step", "substeps", NULL};
+                                       "fall_step", "substeps", "fall_swing", NULL};
     const drape_ynode *m = drape_ynode_get(root, "solver", NULL), *v;
     snprintf(s->integrator, sizeof s->integrator, "%s", "auto");
     s->rtol = SCENE_RTOL;
     s->atol = SCENE_ATOL;
+    s->fall_swing = -1.0; /* DRAPE_FALL_SWING */
     if (!m) return 0;
     if (want_map(c, m, "solver") ||
         drape_ynode_check_keys(c->doc, m, "solver", keys, c->err))
@@ -793,6 +794,15 @@ static int parse_solver(const scene_ctx *c, const drape_ynode *root,
         parse_quantity(c, v, "solver.fall_step", DRAPE_DIM_TIME, "time",
                        Q_POSITIVE, &s->fall_step))
         return -1;
+    if ((v = drape_ynode_get(m, "fall_swing", NULL)) != NULL) {
+        if (parse_quantity(c, v, "solver.fall_swing", DRAPE_DIM_NONE,
+                           "fraction of the peak kinetic energy", Q_NONNEGATIVE,
+                           &s->fall_swing))
+            return -1;
+        if (!(s->fall_swing < 1.0))
+            return drape_ynode_error(c->err, c->doc, v, "solver.fall_swing", DRAPE_E_INPUT,
+                                     "expected a fraction in [0, 1), got \"%s\"", v->scalar);
+    }
     if ((v = drape_ynode_get(m, "substeps", NULL)) != NULL) {
         long k;
         if (parse_long(c, v, "solver.substeps", "an integer from 1 to "

@@ -208,6 +208,11 @@ void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_
     *step_s = s->fall_step > 0.0 ? s->fall_step : DRAPE_FALL_STEP_FACTOR * tau;
 }
 
+double drape_scene_fall_swing(const drape_scene *s)
+{
+    return s->fall_swing >= 0.0 ? s->fall_swing : DRAPE_FALL_SWING;
+}
+
 double drape_scene_animate_step(const drape_scene *s, double *frame_s, int *substeps)
 {
     double frame = s->has_frames && s->frame_every > 0.0 ? s->frame_every : DRAPE_ANIMATE_FRAME;

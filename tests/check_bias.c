@@ -574,6 +574,24 @@ START_TEST(test_twisted_plate)
 }
 END_TEST
 
+/* The strip of scenes/cantilever.yaml (20 x 2.5 cm, 6 cm over the edge),
+ * cut at `deg` from the warp, all five terms. */
+static void strip_scene(drape_scene *s, double deg, double sg)
+{
+    memset(s, 0, sizeof *s);
+    strcpy(s->path, "test.yaml");
+    s->kind = DRAPE_SCENE_CANTILEVER;
+    s->shape = DRAPE_SHAPE_STRIP;
+    s->length = 0.2;
+    s->width = 0.025;
+    s->overhang = 0.06;
+    s->spacing = sg;
+    s->terms = DRAPE_TERM_ALL;
+    s->strip_dir = deg == 90.0 ? DRAPE_WEFT : DRAPE_WARP;
+    s->strip_oblique = deg > 0.0 && deg < 90.0;
+    s->strip_angle = deg;
+}
+
 /* ------------------------------------------------ specimen.direction */
 
 START_TEST(test_scene_direction)
@@ -628,17 +646,7 @@ START_TEST(test_oblique_lattice)
     for (int k = 0; k < 3; k++) {
         double deg = k == 0 ? 22.5 : k == 1 ? 45.0 : 71.0, sg = 0.0025;
         drape_scene s;
-        memset(&s, 0, sizeof s);
-        strcpy(s.path, "test.yaml");
-        s.kind = DRAPE_SCENE_CANTILEVER;
-        s.shape = DRAPE_SHAPE_STRIP;
-        s.length = 0.2;
-        s.width = 0.025;
-        s.overhang = 0.06;
-        s.spacing = sg;
-        s.terms = DRAPE_TERM_ALL;
-        s.strip_oblique = 1;
-        s.strip_angle = deg;
+        strip_scene(&s, deg, sg);
         drape_lattice *L = lattice(&s, &F);
         ck_assert_close_rel(L->mass_total, F.weight * 0.2 * 0.025, 1e-9);
         double a = deg * PI / 180.0, hw[2] = {0, 0}, cw = 0.0;
@@ -736,28 +744,16 @@ static double mtable_eval(double K, void *ctx)
     return sg * (t->m[i] * (1.0 - f) + t->m[i + 1] * f);
 }
 
-/* The strip of scenes/cantilever.yaml (20 x 2.5 cm, 6 cm over the edge)
- * cut at `deg` from the warp, fabric cotton-poly-wang, all five terms
- * (shear holds an oblique strip in its plane: without it the lattice's
- * squares shear freely), spacing sg, static solution. */
+/* strip_scene of cotton-poly-wang (shear holds an oblique strip in its
+ * plane: without it the lattice's squares shear freely), spacing sg,
+ * static solution, and its elastica references. */
 static void cantilever_at(double deg, double sg, drape_cantilever *c, double *x_tip_ref,
                           double *drop_ref, double *chord_cyl)
 {
     drape_fabric F;
     load_fabric("fabrics/cotton-poly-wang.yaml", &F);
     drape_scene s;
-    memset(&s, 0, sizeof s);
-    strcpy(s.path, "test.yaml");
-    s.kind = DRAPE_SCENE_CANTILEVER;
-    s.shape = DRAPE_SHAPE_STRIP;
-    s.length = 0.2;
-    s.width = 0.025;
-    s.overhang = 0.06;
-    s.spacing = sg;
-    s.terms = DRAPE_TERM_ALL;
-    s.strip_dir = deg == 90.0 ? DRAPE_WEFT : DRAPE_WARP;
-    s.strip_oblique = deg > 0.0 && deg < 90.0;
-    s.strip_angle = deg;
+    strip_scene(&s, deg, sg);
     drape_lattice *L = lattice(&s, &F);
     drape_model *m = model(L, &F, DRAPE_TERM_ALL);
     drape_equilibrium_opts eo;

@@ -569,6 +569,44 @@ START_TEST(test_fall_converges)
 }
 END_TEST
 
+/* The swing criterion of the fall (dyn_ke_frac): released horizontally,
+ * the chain is swinging through its lowest point at 0.2 s, so the
+ * dynamics go on past dyn_time; what they do then is the same fixed-step
+ * dynamics run for longer (the state equals a plain fall of the same
+ * length), capped at dyn_time_max; without the criterion they stop at
+ * dyn_time. */
+START_TEST(test_fall_swing)
+{
+    const double dir[3] = {1.0, 0.0, 0.0};
+    drape_lattice *L = chain_new(dir);
+    drape_model *m = chain_model(L);
+    drape_error err;
+    drape_error_clear(&err);
+    drape_equilibrium_result r[4];
+    double ends[4];
+    for (int c = 0; c < 4; c++) {
+        drape_equilibrium_opts o;
+        drape_equilibrium_opts_default(&o);
+        o.dyn_time = 0.2;
+        o.dyn_dt = 0.002;
+        o.dyn_only = 1;
+        if (c == 1) o.dyn_ke_frac = 0.05;                        /* up to 4 x 0.2 s */
+        if (c == 2) { o.dyn_ke_frac = 0.05; o.dyn_time_max = 0.3; }
+        if (c == 3) o.dyn_time = ends[2];                         /* a plain fall as long */
+        ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r[c], &err) == 0, "%s", err.msg);
+        ends[c] = r[c].dyn_end;
+    }
+    ck_assert_double_eq_tol(ends[0], 0.2, 1e-12);
+    ck_assert_msg(ends[1] > 0.2 + 0.01 && ends[1] <= 0.8 + 1e-12, "fall ended at %g s", ends[1]);
+    ck_assert_msg(ends[2] > 0.2 + 0.01 && ends[2] <= 0.3 + 1e-12, "capped fall ended at %g s", ends[2]);
+    ck_assert_int_eq(r[2].dyn_steps, r[3].dyn_steps);
+    for (int k = 0; k < 3 * L->n; k++) ck_assert_double_eq_tol(r[2].x[k], r[3].x[k], 1e-12);
+    for (int c = 0; c < 4; c++) drape_equilibrium_result_free(&r[c]);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 Suite *equilibrium_suite(void)
 {
     Suite *s = suite_create("equilibrium");
@@ -577,6 +615,7 @@ Suite *equilibrium_suite(void)
     tcase_add_loop_test(tc, test_chain_hangs, 0, 3);
     tcase_add_test(tc, test_chain_upright_is_saddle);
     tcase_add_loop_test(tc, test_fall_converges, 0, 2);
+    tcase_add_test(tc, test_fall_swing);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);
     suite_add_tcase(s, tc);

@@ -69,6 +69,11 @@ typedef struct drape_equilibrium_opts {
     double dyn_time;     /* s: damped dynamics before the minimisation; 0 =
                             off (default) */
     double dyn_dt;       /* s: its fixed step (needed when dyn_time > 0) */
+    double dyn_ke_frac;  /* > 0: after dyn_time the dynamics go on while the
+                            kinetic energy exceeds this fraction of its
+                            largest value so far (the cloth still swings),
+                            up to dyn_time_max; 0 = stop at dyn_time */
+    double dyn_time_max; /* s: the longest such dynamics (0 = 4 dyn_time) */
     int dyn_only;        /* 1: return after the damped dynamics (status
                             DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
@@ -110,6 +115,7 @@ typedef struct drape_equilibrium_result {
     int iterations;       /* iterations of the loop (each factorises once,
                              twice when Newton falls back to Hc) */
     int dyn_steps;        /* damped dynamics steps */
+    double dyn_end;       /* s: when the damped dynamics ended */
     int ptc_steps;        /* accepted PTC steps */
     int newton_steps;     /* accepted Newton steps */
     int rejected;         /* iterations whose step was refused */

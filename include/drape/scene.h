@@ -117,6 +117,10 @@ typedef struct drape_scene {
     drape_method method;           /* solver.method; DEFAULT when not given */
     double fall_time, fall_step;   /* solver.fall_time, fall_step, s; 0 = the
                                       fall method's defaults */
+    double fall_swing;             /* solver.fall_swing (ninth session): the
+                                      fall goes on past fall_time while the
+                                      kinetic energy exceeds this fraction of
+                                      its peak; < 0 = DRAPE_FALL_SWING, 0 = off */
     int substeps;                  /* solver.substeps: animate steps per frame
                                       interval; 0 = DRAPE_ANIMATE_SUBSTEPS (added,
                                       issue 16) */
@@ -184,6 +188,12 @@ int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
  * times of their skirt. */
 #define DRAPE_FALL_TIME_FACTOR 10.0
 #define DRAPE_FALL_STEP_FACTOR 0.03125
+/* The fall does not end while the cloth still swings: past t_fall it goes
+ * on while the largest kinetic energy over the last t_fall / 5 exceeds
+ * DRAPE_FALL_SWING of its peak, up to DRAPE_FALL_TIME_MAX t_fall
+ * (docs/ensemble.md, "The swing criterion"). */
+#define DRAPE_FALL_SWING 0.02
+#define DRAPE_FALL_TIME_MAX 4.0
 /* Iterations of the static solver after the fall (the static method keeps
  * its 500; docs/ensemble.md). */
 #define DRAPE_FALL_MAX_ITERS 2000
@@ -191,6 +201,8 @@ int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
  * this multiple of the static tolerance counts as the rest state. */
 #define DRAPE_FALL_FLOOR 100.0
 void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_s);
+/* The fall's swing fraction (solver.fall_swing or DRAPE_FALL_SWING). */
+double drape_scene_fall_swing(const drape_scene *s);
 
 /* The animate method's fixed step (docs/animate.md): the frame interval
  * (output.frames.every, or DRAPE_ANIMATE_FRAME when the scene writes no
