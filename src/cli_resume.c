@@ -92,6 +92,7 @@ int drape_cli_resume_load(const char *dir, resume_info *ri, drape_error *err)
     ri->strain_limit = ck_num(c, "strain_limit");
     ri->below_since = ck_num(c, "eq_below_since_s");
     ri->fixed_step = ck_num(c, "step_s"); /* added (issue 16) */
+    ri->terms = ck_num(c, "terms");       /* added (issue 18) */
     double ms = ck_num(c, "max_steps"), fr = ck_num(c, "frames"), h5 = ck_num(c, "hdf5");
     ri->ref.valid = ck_num(c, "energy_ref_valid") == 1.0;
     ri->ref.energy_J = ck_num(c, "energy_ref_J");
@@ -181,4 +182,5 @@ void drape_cli_run_kv_fill(run_kv *k, const char *scene_path, const drape_scene 
     kv_num(k, "energy_ref_gravity_J", res->diag_ref.E.gravity);
     kv_num(k, "signal", signal);
     kv_num(k, "step_s", so->fixed_step); /* animate's step (issue 16) */
+    kv_num(k, "terms", (double)s->terms); /* the terms run, --terms included (issue 18) */
 }

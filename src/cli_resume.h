@@ -22,6 +22,8 @@ typedef struct resume_info {
     char integrator[DRAPE_INTEGRATOR_NAME_MAX], form[32], linsol[32];
     double rtol, atol, spacing, t_max, strain_limit, below_since;
     double fixed_step;  /* animate's step, s; NaN when not stored (older files) */
+    double terms;       /* the DRAPE_TERM_* mask run (--terms); NaN when not
+                           stored (older files: the scene's) */
     long max_steps;
     int max_order;   /* 0: the scene's (files written before --max-order) */
     int frames;      /* frames written before (OBJ and HDF5 numbering) */

@@ -475,6 +475,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_swing >= 0) s.fall_swing = ra->fall_swing;
     if (ra->substeps > 0) s.substeps = ra->substeps;
     if (ra->terms) s.terms = ra->terms;
+    if (ri && ri->terms >= 1.0 && ri->terms <= (double)DRAPE_TERM_ALL) /* what ran */
+        s.terms = (unsigned)ri->terms;
     if (ri && ri->fixed_step > 0.0) { /* animate's step (its --substeps) */
         double frame;
         drape_scene_animate_step(&s, &frame, NULL);

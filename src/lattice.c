@@ -88,7 +88,6 @@ typedef struct geom {
                              y = (-(i - ci) rc + (j - cj) rs) s, and lo/hi
                              bound the strip in those rotated index units */
     double rs, rc;        /* sin and cos of the strip's angle from the warp */
-    int clip_free;        /* 1: spec_free_area also cuts at x = 0 (cantilever) */
 } geom;
 
 /* ---- areas ----------------------------------------------------------- */
@@ -519,7 +518,12 @@ static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s
     }
     for (int p = 0; p < L->n; p++) {
         int i = L->gi[p], j = L->gj[p];
-        double a = cell_area(g, i, j);
+        /* a cantilever lumps only the part beyond the platform edge: the
+         * particles on the platform have no hinge because nothing bends
+         * there, not because the strip ends */
+        double a = s->kind == DRAPE_SCENE_CANTILEVER
+                       ? rot_area(g, i - 0.5, i + 0.5, j - 0.5, j + 0.5, 1)
+                       : cell_area(g, i, j);
         for (int d = 0; d < 2 && L->n_hinges > 0; d++) {
             if (hid[2 * ((long)j * L->ni + i) + d] >= 0 || a <= 0.0) continue;
             for (int r = 1; r <= 2; r++) {
@@ -777,10 +781,13 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
     }
 
     /* elements: count, allocate, fill.  Twist cells only where the bias
-     * term is asked for (by default it is), with bend, and the fabric
-     * gives a bias curve: without one, `bias` leaves the seed's model */
+     * term is asked for (by default it is), with bend, the fabric gives a
+     * bias curve (without one, `bias` leaves the seed's model) and the
+     * energy form is the consistent one (the twist energy is calibrated
+     * against the consistent hinges; the seed form's hinges are 4 times
+     * stiffer, so `seed` runs the seed's model) */
     int want_cells = (s->terms & DRAPE_TERM_BIAS) && (s->terms & DRAPE_TERM_BEND) &&
-                     f->has_bias;
+                     f->has_bias && s->energy_form == DRAPE_FORM_CONSISTENT;
     build_elements(L, &g, s, want_cells, 0);
     if (L->n_edges > 0) {
         L->edges = drape_calloc((size_t)L->n_edges, sizeof *L->edges);
@@ -856,7 +863,7 @@ static int bad_id(const drape_lattice *L, int p) { return p < 0 || p >= L->n; }
 
 static int bad_weight(double w) { return !(w > 0.0 && w <= 1.0); }
 /* hinges and cells of an oblique strip may carry lumped edge area (L6) */
-static int bad_lumped_weight(double w) { return !(w > 0.0 && w <= 8.0); }
+static int bad_lumped_weight(double w) { return !(w > 0.0 && w <= 64.0); }
 
 /* 1 unless q is the neighbour of p at step (di, dj) in the grid and at
  * distance sigma in the rest state. */

@@ -396,7 +396,7 @@ static int kern_shear(const drape_model *m, const drape_corner *cn,
 
 /* Twist cell (issue 18; docs/model.md, "Bias bending").  With the cell's
  * corners P0 = (i, j), P1 = (i+1, j), P2 = (i+1, j+1), P3 = (i, j+1):
- *     a  = P0 - P1 + P2 - P3   (its non-planarity: sigma^2 * 2 x_xy for a
+ *     a  = P0 - P1 + P2 - P3   (its non-planarity: sigma^2 x_xy for a
  *                               surface x(u, v); zero for any cylinder
  *                               whose axis is along a lattice direction)
  *     e1 = P2 - P0, e2 = P3 - P1 (the diagonals), c = e1 x e2,
