@@ -250,6 +250,11 @@ int drape_cli_bench_point(const bench *b, const char *integrator, double rtol, d
         if (rr == 0) rr = read_until(fd, v, sizeof(double) * b->n3, deadline);
     }
     close(fd);
+    /* a point whose own wall time is over the limit is a timeout too: a
+     * run faster than the scheduler can finish in the child before the
+     * parent starts its clock (seen with --max-wall 1e-6 on a loaded
+     * machine) */
+    if (rr == 0 && limit > 0 && p->status == PT_OK && !(p->wall_s <= limit)) rr = 1;
     if (rr == 1) kill(pid, SIGKILL);
     int wst = 0;
     while (waitpid(pid, &wst, 0) < 0 && errno == EINTR) {}
