@@ -53,7 +53,8 @@ static const char batch_usage[] =
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
     "  --t-max T, --max-steps N, --strain-limit X, --method fall|dynamic|static,\n"
     "  --linear-solver NAME, --max-order N, --specimens N, --seed N,\n"
-    "  --fall-time T, --fall-step T (each fabric's specimens run one after\n"
+    "  --fall-time T, --fall-step T, --fall-swing X, --terms LIST (each\n"
+    "  fabric's specimens run one after\n"
     "  another in its process; the results carry the ensemble columns dc_sd,\n"
     "  dc_ci95, dc_mode, nodes_hist, specimens: docs/ensemble.md)\n"
     "\n"
@@ -104,7 +105,7 @@ typedef struct job {
 typedef struct batch {
     const char *scene;
     const char *dir;
-    const char *pass[32];        /* options passed on to `drape run` (name, value) */
+    const char *pass[48];        /* options passed on to `drape run` (name, value) */
     int npass;
     int frames, progress;
     job *jobs;
@@ -570,7 +571,7 @@ int drape_cli_batch(int argc, char **argv)
 {
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
            O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
-           O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP };
+           O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_FALLSWING, O_TERMS };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -591,6 +592,8 @@ int drape_cli_batch(int argc, char **argv)
         {"seed", required_argument, NULL, O_SEED},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
+        {"fall-swing", required_argument, NULL, O_FALLSWING},
+        {"terms", required_argument, NULL, O_TERMS},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -661,6 +664,30 @@ int drape_cli_batch(int argc, char **argv)
             name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
             if (check_quantity(name, optarg, DRAPE_DIM_TIME, 1)) return 2;
             break;
+        case O_FALLSWING: {
+            char *end;
+            double v = strtod(optarg, &end);
+            if (*end || end == optarg || !(v >= 0.0 && v < 1.0))
+                return usage_error("--fall-swing: expected a fraction in [0, 1), got `%s'", optarg);
+            name = "--fall-swing";
+            break;
+        }
+        case O_TERMS: {
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", optarg);
+            int n = 0;
+            for (char *save = NULL, *t = strtok_r(buf, ",", &save); t;
+                 t = strtok_r(NULL, ",", &save), n++) {
+                int k = 0;
+                while (drape_term_names[k] && strcmp(drape_term_names[k], t) != 0) k++;
+                if (!drape_term_names[k])
+                    return usage_error("--terms: expected a comma-separated list of stretch, "
+                                       "bend, shear, gravity, bias, got `%s'", optarg);
+            }
+            if (n == 0) return usage_error("--terms: expected a comma-separated list of terms, got `%s'", optarg);
+            name = "--terms";
+            break;
+        }
         case O_SPECIMENS:
         case O_SEED: {
             char *end;

@@ -307,6 +307,43 @@ START_TEST(test_max_order_passed_on)
 }
 END_TEST
 
+/* --terms and --fall-swing reach the runs (issue 18, ninth session): a
+ * fabric with a bias curve runs with the twist term unless --terms leaves
+ * it out, and --fall-swing 0 ends every fall at its fall time. */
+START_TEST(test_terms_passed_on)
+{
+    for (int k = 0; k < 2; k++) {
+        const char *d = subdir(k ? "terms-seed" : "terms-all");
+        char args[4096];
+        snprintf(args, sizeof args,
+                 "batch -q ../scenes/hang.yaml %s --spacing 10cm --t-max 0.05s %s --out %s", DENIM,
+                 k ? "--terms stretch,bend,shear,gravity" : "", d);
+        ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+        table *t = malloc(sizeof *t);
+        ck_assert_ptr_nonnull(t);
+        load_table(d, t);
+        ck_assert_int_eq(t->nrow, 1);
+        ck_assert_str_eq(cell(t, 0, "terms"), k ? "stretch+bend+shear+gravity"
+                                                : "stretch+bend+shear+gravity+bias");
+        free(t);
+    }
+    const char *d = subdir("swing0");
+    char args[4096];
+    snprintf(args, sizeof args,
+             "batch -q ../scenes/cusick.yaml %s --spacing 5cm --specimens 1 --fall-swing 0 --out %s",
+             DENIM, d);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(d, t);
+    ck_assert_str_eq(cell(t, 0, "fall_end_s"), cell(t, 0, "fall_time_s"));
+    free(t);
+    ck_assert_int_eq(tu_run_drape("batch -q ../scenes/hang.yaml --terms bend,twist", out, CAP, err,
+                                  CAP), 2);
+    ck_assert_msg(strstr(err, "--terms"), "%s", err);
+}
+END_TEST
+
 START_TEST(test_resume)
 {
     const char *dir = subdir("resume");
@@ -617,6 +654,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_parallel_same_rows);
     tcase_add_test(tc, test_method_passed_on);
     tcase_add_test(tc, test_max_order_passed_on);
+    tcase_add_test(tc, test_terms_passed_on);
     tcase_add_test(tc, test_resume);
     tcase_add_test(tc, test_failed_run);
     tcase_add_test(tc, test_usage);
