@@ -673,18 +673,10 @@ int drape_cli_batch(int argc, char **argv)
             break;
         }
         case O_TERMS: {
-            char buf[256];
-            snprintf(buf, sizeof buf, "%s", optarg);
-            int n = 0;
-            for (char *save = NULL, *t = strtok_r(buf, ",", &save); t;
-                 t = strtok_r(NULL, ",", &save), n++) {
-                int k = 0;
-                while (drape_term_names[k] && strcmp(drape_term_names[k], t) != 0) k++;
-                if (!drape_term_names[k])
-                    return usage_error("--terms: expected a comma-separated list of stretch, "
-                                       "bend, shear, gravity, bias, got `%s'", optarg);
-            }
-            if (n == 0) return usage_error("--terms: expected a comma-separated list of terms, got `%s'", optarg);
+            unsigned t;
+            if (drape_scene_terms_parse(optarg, &t) != 0)
+                return usage_error("--terms: expected a comma-separated list of stretch, "
+                                   "bend, shear, gravity, bias, got `%s'", optarg);
             name = "--terms";
             break;
         }

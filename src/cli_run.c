@@ -936,24 +936,11 @@ int drape_cli_run(int argc, char **argv)
                                    optarg, "");
             break;
         }
-        case O_TERMS: {
-            ra.terms = 0;
-            char buf[256];
-            snprintf(buf, sizeof buf, "%s", optarg);
-            for (char *save = NULL, *t = strtok_r(buf, ",", &save); t;
-                 t = strtok_r(NULL, ",", &save)) {
-                int k = 0;
-                while (drape_term_names[k] && strcmp(drape_term_names[k], t) != 0) k++;
-                if (!drape_term_names[k])
-                    return usage_error("--terms: unknown term `%s' (expected a comma-separated "
-                                       "list of stretch, bend, shear, gravity, bias)%s", t, "");
-                ra.terms |= 1u << k;
-            }
-            if (!ra.terms)
-                return usage_error("--terms: expected a comma-separated list of terms, got `%s'%s",
-                                   optarg, "");
+        case O_TERMS:
+            if (drape_scene_terms_parse(optarg, &ra.terms) != 0)
+                return usage_error("--terms: expected a comma-separated list of stretch, bend, "
+                                   "shear, gravity, bias, got `%s'%s", optarg, "");
             break;
-        }
         case O_SUBSTEPS:
             if (parse_count(optarg, 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &ra.substeps) != 0)
                 return usage_error("--substeps: expected an integer from 1 to %s, got `%s'",

@@ -214,6 +214,16 @@ static double spec_area(const geom *g, double x0, double x1, double y0,
          * overlap(y0, y1, g->lo[1], g->hi[1]);
 }
 
+/* The part of the grid rectangle that can bend and twist: inside the
+ * specimen and, on an oblique cantilever strip, beyond the platform edge
+ * (on the platform nothing bends; L5, L6). */
+static double free_area(const geom *g, const drape_scene *s, double x0, double x1,
+                        double y0, double y1)
+{
+    if (g->rot) return rot_area(g, x0, x1, y0, y1, s->kind == DRAPE_SCENE_CANTILEVER);
+    return spec_area(g, x0, x1, y0, y1);
+}
+
 static double cell_area(const geom *g, int i, int j)
 {
     return spec_area(g, i - 0.5, i + 0.5, j - 0.5, j + 0.5);
@@ -518,12 +528,10 @@ static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s
     }
     for (int p = 0; p < L->n; p++) {
         int i = L->gi[p], j = L->gj[p];
-        /* a cantilever lumps only the part beyond the platform edge: the
-         * particles on the platform have no hinge because nothing bends
-         * there, not because the strip ends */
-        double a = s->kind == DRAPE_SCENE_CANTILEVER
-                       ? rot_area(g, i - 0.5, i + 0.5, j - 0.5, j + 0.5, 1)
-                       : cell_area(g, i, j);
+        /* only the part beyond the platform edge: the particles on the
+         * platform have no hinge because nothing bends there, not because
+         * the strip ends */
+        double a = free_area(g, s, i - 0.5, i + 0.5, j - 0.5, j + 0.5);
         for (int d = 0; d < 2 && L->n_hinges > 0; d++) {
             if (hid[2 * ((long)j * L->ni + i) + d] >= 0 || a <= 0.0) continue;
             for (int r = 1; r <= 2; r++) {
@@ -546,8 +554,7 @@ static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s
         for (int j = -1; j < L->nj; j++)
             for (int i = -1; i < L->ni; i++) {
                 if (i >= 0 && j >= 0 && qid[(long)j * L->ni + i] >= 0) continue;
-                double a = s->kind == DRAPE_SCENE_CANTILEVER ? rot_area(g, i, i + 1.0, j, j + 1.0, 1)
-                                                             : rot_area(g, i, i + 1.0, j, j + 1.0, 0);
+                double a = free_area(g, s, i, i + 1.0, j, j + 1.0);
                 if (a <= SNAP) continue;
                 /* the nearest cell: rings of growing radius, nearest first */
                 int done = 0;
@@ -658,11 +665,7 @@ static int build_elements(drape_lattice *L, const geom *g,
             if (q[1] < 0 || q[2] < 0 || q[3] < 0) continue;
             if (L->fixed[q[0]] && L->fixed[q[1]] && L->fixed[q[2]] && L->fixed[q[3]])
                 continue;
-            /* an oblique cantilever's squares count only their part beyond
-             * the platform edge (on the platform nothing twists) */
-            double wq = frac(g->rot && s->kind == DRAPE_SCENE_CANTILEVER
-                                 ? rot_area(g, i, i + 1.0, j, j + 1.0, 1)
-                                 : spec_area(g, i, i + 1.0, j, j + 1.0), 1.0);
+            double wq = frac(free_area(g, s, i, i + 1.0, j, j + 1.0), 1.0);
             if (!(wq > SNAP)) continue;
             if (fill) {
                 drape_cell *k = &L->cells[nq];

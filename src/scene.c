@@ -54,6 +54,22 @@ static const char *const form_names[] = {"consistent", "seed", NULL};
 const char *const drape_method_names[] = {"default", "dynamic", "static", "fall", "animate", NULL};
 const char *const drape_term_names[] = {"stretch", "bend", "shear", "gravity", "bias",
                                         NULL};
+int drape_scene_terms_parse(const char *list, unsigned *terms)
+{
+    char buf[256], *save = NULL;
+    unsigned m = 0;
+    if ((size_t)snprintf(buf, sizeof buf, "%s", list) >= sizeof buf) return -1;
+    for (char *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
+        int k = 0;
+        while (drape_term_names[k] && strcmp(drape_term_names[k], t) != 0) k++;
+        if (!drape_term_names[k]) return -1;
+        m |= 1u << k;
+    }
+    if (!m) return -1;
+    *terms = m;
+    return 0;
+}
+
 static const char *const table_shape_names[] = {"square", "round", NULL};
 
 const char *drape_scene_kind_name(drape_scene_kind k)

@@ -61,6 +61,9 @@ typedef enum drape_method {
 /* "default", "dynamic", "static", "fall", "animate", NULL */
 /* Names of the DRAPE_TERM_* bits, in bit order (NULL-terminated). */
 extern const char *const drape_term_names[];
+/* A comma-separated list of term names (`--terms`) into a DRAPE_TERM_*
+ * mask.  0, or -1 for an unknown name or an empty list. */
+int drape_scene_terms_parse(const char *list, unsigned *terms);
 extern const char *const drape_method_names[];
 
 /* Repeated specimens (MODEL.md 6): at most this many per run. */
