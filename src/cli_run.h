@@ -1,5 +1,5 @@
 /* cli_run.h: `drape run` between its files: the options of one run
- * (cli_run.c), the single specimen (cli_run.c), the ensemble of repeated
+ * (cli_run_args.c), the single specimen (cli_run.c), the ensemble of repeated
  * specimens over child processes and its picture (cli_specimens.c).
  * Private to src/cli_*.c. */
 #ifndef DRAPE_CLI_RUN_H

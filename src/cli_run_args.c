@@ -1,0 +1,374 @@
+/* cli_run_args.c: the command line of `drape run`: its --help, the
+ * options parsed and checked (a bad value exits 2 naming the option), the
+ * default scene and the data directories, then the run as asked: resumed
+ * from a checkpoint (cli_run.c), or one specimen or an ensemble
+ * (cli_specimens.c).  The run itself is cli_run.c. */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "cli_data.h"
+#include "cli_io.h"
+#include "cli_run.h"
+#include "drape/error.h"
+#include "drape/integrator.h"
+#include "drape/scene.h"
+#include "drape/units.h"
+
+#define DEFAULT_SCENE "scenes/cusick.yaml"
+
+static const char run_usage[] =
+    "Usage: drape run [SCENE.yaml] [OPTIONS]\n"
+    "       drape run --resume DIR [--format json|csv] [-q]\n"
+    "\n"
+    "Run a scene (default " DEFAULT_SCENE ") and print one JSON object on\n"
+    "stdout with the result in SI units (keys: fabric, scene, integrator,\n"
+    "energy_form, rtol, atol, spacing_m, particles, free_particles, status,\n"
+    "t_end_s, dc, nodes, r_min_m, r_max_m, tip_angle_deg, bending_length_m,\n"
+    "flexural_rigidity_Nm, energy_J{kinetic,stretch,bend,shear,gravity},\n"
+    "max_strain, wall_s, steps, rhs_evals, jac_evals, lin_setups, nonlin_iters,\n"
+    "err_test_fails, conv_fails, and more: mass_kg, areas, max_speed_m_s (at the\n"
+    "end), mean_speed_m_s (largest particle speed averaged over the last\n"
+    "equilibrium check interval: what the equilibrium test compares), the static\n"
+    "solver's keys, linear_solver, lin_iters, lin_factors, integrator_switches\n"
+    "(auto: changes between cvode-bdf and arkode-erk), max_order (cvode-bdf,\n"
+    "auto); null where the scene does not produce one).  status is\n"
+    "equilibrium, t_max, failed or interrupted.\n"
+    "\n"
+    "Repeated specimens (scene key `specimens: N`, or --specimens N): a drape\n"
+    "test of N specimens that differ only in the perturbation seed (specimen k\n"
+    "= 0..N-1 uses seed + k), run in N child processes, -j at a time.  Then dc\n"
+    "is the mean DC, nodes the most frequent node count, and the result adds\n"
+    "dc_sd (sample standard deviation), dc_ci95 (half-width of the 95 %\n"
+    "interval of the mean, Student t), dc_mode (mean DC of the specimens with\n"
+    "the modal node count), nodes_hist ({\"3\": 2, \"4\": 6}; CSV 3:2;4:6),\n"
+    "specimens (one object per specimen: seed, status, dc, nodes, r_min_m,\n"
+    "r_max_m, cpu_s; CSV: the count), specimens_failed, seed (the first), cpu_s\n"
+    "(CPU seconds, child processes included); counters are summed over the\n"
+    "specimens, energies and radii averaged (docs/ensemble.md).  The shipped\n"
+    "Cusick scene asks for 12, the table scene for 28.\n"
+    "\n"
+    "Options (override the scene file):\n"
+    "  --fabric FILE            fabric file instead of the scene's\n"
+    "  --integrator NAME        auto, arkode-imex, arkode-dirk, arkode-erk,\n"
+    "                           cvode-bdf, gsl-msbdf, gsl-rk8pd, animate\n"
+    "  --rtol X, --atol X       tolerances (atol on positions, m)\n"
+    "  --spacing LEN            lattice spacing, e.g. 5mm or '0.5 cm'\n"
+    "  --energy-form FORM       consistent or seed\n"
+    "  --t-max T                end time, e.g. 3s\n"
+    "  --method METHOD          fall (the default where the scene ends at\n"
+    "                           equilibrium): a short damped fall with a fixed\n"
+    "                           large step, then the static solver (about 0.8 s\n"
+    "                           per specimen at 1 cm; its ensembles reproduce\n"
+    "                           the dynamic ones: docs/ensemble.md); dynamic (the\n"
+    "                           default otherwise): integrate the equations of\n"
+    "                           motion in time; static: minimise the potential\n"
+    "                           energy directly (pseudo-transient continuation,\n"
+    "                           Newton, Hessian check; docs/equilibrium.md): only\n"
+    "                           the final state, no transient frames; animate:\n"
+    "                           frames for renderers at graphics speed, a fixed\n"
+    "                           step (the frame interval / --substeps), backward\n"
+    "                           Euler by a few Newton iterations on one or two\n"
+    "                           sparse factorisations (after Baraff & Witkin\n"
+    "                           1998), first order, the energy never rising, no\n"
+    "                           error control (docs/animate.md)\n"
+    "  --substeps N             animate: steps per frame interval (scene:\n"
+    "                           solver.substeps; default: the fewest that keep\n"
+    "                           the step at most 1/30 s; the frame interval is\n"
+    "                           output.frames.every, or 1/30 s)\n"
+    "  --linear-solver NAME     auto (default), klu, schur or schur-direct\n"
+    "                           (docs/integrators.md, \"Linear solvers\")\n"
+    "  --max-order N            highest BDF order of cvode-bdf (also inside auto),\n"
+    "                           1 to 5 (scene: solver.max_order, default 2); 1 is\n"
+    "                           backward Euler, which damps fast vibrations and is\n"
+    "                           the cheapest at loose tolerances\n"
+    "  --max-steps N            give up (status failed) after N integrator steps\n"
+    "                           between two output points (default 1000000)\n"
+    "  --strain-limit X         stop (status failed) when a stretch edge's strain\n"
+    "                           exceeds X, e.g. 0.2 = 20 % (scene: end.strain_limit,\n"
+    "                           default 0.2)\n"
+    "  --fall-time T, --fall-step T  the fall method's least duration and its\n"
+    "                           fixed step\n"
+    "                           (scene: solver.fall_time, fall_step; default\n"
+    "                           10 and 1/32 pendulum times sqrt(h/g) of the free\n"
+    "                           length h: 0.78 s and 2.4 ms for the Cusick test)\n"
+    "  --fall-swing X           the fall goes on past --fall-time while the\n"
+    "                           cloth still swings: while its kinetic energy over\n"
+    "                           the last fifth of the fall time exceeds X of its\n"
+    "                           peak, up to 4 fall times (scene:\n"
+    "                           solver.fall_swing; default 0.02; 0 = stop at the\n"
+    "                           fall time); result key fall_end_s\n"
+    "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
+    "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
+    "  --seed N                 perturbation seed (of the first specimen)\n"
+    "  --terms LIST             energy terms, comma-separated: stretch, bend, shear,\n"
+    "                           gravity, bias (scene: model.terms; default all;\n"
+    "                           bias, the twist that makes a fabric's measured bias\n"
+    "                           curve, acts only where the fabric gives one:\n"
+    "                           docs/model.md, \"Bias bending\")\n"
+    "  --out DIR                write frames (OBJ, drape.h5 + drape.xmf) into DIR;\n"
+    "                           with N > 1 specimens DIR/specimen-001/...; Cusick\n"
+    "                           and table scenes: DIR/shadow.svg, the top view of\n"
+    "                           every specimen's shadow with the nodes and the DC\n"
+    "  --resume DIR             continue a run that was interrupted (SIGINT, SIGTERM)\n"
+    "                           from DIR/drape.h5, with the options stored there\n"
+    "  --format json|csv        result format on stdout (default json)\n"
+    "  -q, --quiet              no progress on stderr\n"
+    "  -h, --help               show this help\n"
+    "\n"
+    "SIGINT or SIGTERM stops a dynamic run within one model evaluation; it ends\n"
+    "at the last output point (frame or equilibrium check) with status\n"
+    "interrupted, the frames so far and DIR/drape.h5 kept for --resume; a second\n"
+    "signal ends drape at once.\n"
+    "\n"
+    "An ensemble stops on SIGINT or SIGTERM as its specimens do; it cannot be\n"
+    "resumed (run it again).\n"
+    "\n"
+    "Exit status: 0 equilibrium or t_max (an ensemble: at least one specimen;\n"
+    "failed ones are counted in specimens_failed and named on stderr), 1 invalid\n"
+    "input, 2 bad command line, 3 I/O error, 4 the run failed (numerical; an\n"
+    "ensemble: every specimen), 5 out of memory, 130 interrupted by SIGINT, 143\n"
+    "interrupted by SIGTERM.\n";
+
+
+/* ---- parsing ------------------------------------------------------------ */
+
+static int usage_error(const char *fmt, const char *a, const char *b)
+{
+    fputs("drape: ", stderr);
+    fprintf(stderr, fmt, a, b);
+    fputs("\nTry `drape run --help'.\n", stderr);
+    return drape_error_exit_status(DRAPE_E_USAGE);
+}
+
+static int parse_quantity(const char *opt, const char *text, drape_dim dim,
+                          double *v)
+{
+    char why[256];
+    if (drape_units_parse(text, dim, v, why, sizeof why) != 0) {
+        usage_error("%s: %s", opt, why);
+        return -1;
+    }
+    return 0;
+}
+
+/* A count from min to max ("-j 0" = one per core). */
+static int parse_count(const char *text, int min, int max, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(text, &end, 10);
+    if (errno || end == text || *end || v < min || v > max) return -1;
+    *out = (int)v;
+    return 0;
+}
+
+int drape_cli_run(int argc, char **argv)
+{
+    enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
+           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
+           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
+           O_TERMS, O_FALLSWING };
+    static const struct option opts[] = {
+        {"fabric", required_argument, NULL, O_FABRIC},
+        {"integrator", required_argument, NULL, O_INTEGRATOR},
+        {"rtol", required_argument, NULL, O_RTOL},
+        {"atol", required_argument, NULL, O_ATOL},
+        {"spacing", required_argument, NULL, O_SPACING},
+        {"energy-form", required_argument, NULL, O_FORM},
+        {"t-max", required_argument, NULL, O_TMAX},
+        {"out", required_argument, NULL, O_OUT},
+        {"max-steps", required_argument, NULL, O_MAXSTEPS},
+        {"max-order", required_argument, NULL, O_MAXORDER},
+        {"method", required_argument, NULL, O_METHOD},
+        {"linear-solver", required_argument, NULL, O_LINSOL},
+        {"strain-limit", required_argument, NULL, O_STRAIN},
+        {"resume", required_argument, NULL, O_RESUME},
+        {"specimens", required_argument, NULL, O_SPECIMENS},
+        {"jobs", required_argument, NULL, 'j'},
+        {"seed", required_argument, NULL, O_SEED},
+        {"terms", required_argument, NULL, O_TERMS},
+        {"fall-swing", required_argument, NULL, O_FALLSWING},
+        {"fall-time", required_argument, NULL, O_FALLTIME},
+        {"fall-step", required_argument, NULL, O_FALLSTEP},
+        {"substeps", required_argument, NULL, O_SUBSTEPS},
+        {"format", required_argument, NULL, O_FORMAT},
+        {"quiet", no_argument, NULL, 'q'},
+        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0}};
+    const char *fabric_path = NULL, *integrator = NULL, *form = NULL, *out_dir = NULL;
+    const char *resume_dir = NULL, *run_opt = NULL;
+    double rtol = 0, atol = 0, spacing = 0, t_max = 0, strain_limit = 0;
+    int csv = 0, quiet = 0, c;
+    long max_steps = 0;
+    int max_order = 0;
+    int method = DRAPE_METHOD_DEFAULT, linsol = 0;
+    run_args ra;
+    memset(&ra, 0, sizeof ra);
+    ra.fall_swing = -1.0;
+    ra.jobs = 0; /* one per core */
+    while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
+        switch (c) {
+        case O_FABRIC: fabric_path = optarg; break;
+        case O_INTEGRATOR: integrator = optarg; break;
+        case O_RTOL:
+            if (parse_quantity("--rtol", optarg, DRAPE_DIM_NONE, &rtol)) return 2;
+            if (!(rtol > 0 && rtol < 1)) return usage_error("--rtol: must be in (0, 1), got %s%s", optarg, "");
+            break;
+        case O_ATOL:
+            if (parse_quantity("--atol", optarg, DRAPE_DIM_LENGTH, &atol)) return 2;
+            if (!(atol > 0)) return usage_error("--atol: must be positive, got %s%s", optarg, "");
+            break;
+        case O_SPACING:
+            if (parse_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, &spacing)) return 2;
+            if (!(spacing > 0)) return usage_error("--spacing: must be positive, got %s%s", optarg, "");
+            break;
+        case O_FORM: form = optarg; break;
+        case O_TMAX:
+            if (parse_quantity("--t-max", optarg, DRAPE_DIM_TIME, &t_max)) return 2;
+            if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
+            break;
+        case O_STRAIN:
+            if (parse_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, &strain_limit)) return 2;
+            if (!(strain_limit > 0) || !isfinite(strain_limit))
+                return usage_error("--strain-limit: must be a positive number, got %s%s", optarg, "");
+            break;
+        case O_OUT: out_dir = optarg; break;
+        case O_RESUME: resume_dir = optarg; break;
+        case O_LINSOL:
+            if (drape_linsol_parse(optarg, &linsol) != 0)
+                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'%s", optarg, "");
+            break;
+        case O_METHOD:
+            method = DRAPE_METHOD_DEFAULT;
+            for (int k = 1; drape_method_names[k]; k++)
+                if (strcmp(optarg, drape_method_names[k]) == 0) method = k;
+            if (method == DRAPE_METHOD_DEFAULT)
+                return usage_error("--method: expected fall, dynamic, static or animate, got `%s'%s", optarg, "");
+            break;
+        case O_SPECIMENS:
+            if (parse_count(optarg, 1, DRAPE_SCENE_SPECIMENS_MAX, &ra.specimens) != 0)
+                return usage_error("--specimens: expected an integer from 1 to %s, got `%s'",
+                                   DRAPE_SCENE_SPECIMENS_MAX_TEXT, optarg);
+            break;
+        case 'j':
+            if (parse_count(optarg, 0, 4096, &ra.jobs) != 0)
+                return usage_error("-j: expected a number of processes from 0 (one per core) to %s, got `%s'",
+                                   "4096", optarg);
+            break;
+        case O_SEED: {
+            char *end;
+            errno = 0;
+            unsigned long v = strtoul(optarg, &end, 10);
+            if (errno || *end || optarg[0] == '-' || optarg[0] == 0)
+                return usage_error("--seed: expected a non-negative integer, got `%s'%s", optarg, "");
+            ra.has_seed = 1;
+            ra.seed = v;
+            break;
+        }
+        case O_FALLSWING: {
+            char *end;
+            ra.fall_swing = strtod(optarg, &end);
+            if (*end || end == optarg || !(ra.fall_swing >= 0.0 && ra.fall_swing < 1.0))
+                return usage_error("--fall-swing: expected a fraction in [0, 1), got `%s'%s",
+                                   optarg, "");
+            break;
+        }
+        case O_TERMS:
+            if (drape_scene_terms_parse(optarg, &ra.terms) != 0)
+                return usage_error("--terms: expected a comma-separated list of stretch, bend, "
+                                   "shear, gravity, bias, got `%s'%s", optarg, "");
+            break;
+        case O_SUBSTEPS:
+            if (parse_count(optarg, 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &ra.substeps) != 0)
+                return usage_error("--substeps: expected an integer from 1 to %s, got `%s'",
+                                   "10000", optarg);
+            break;
+        case O_FALLTIME:
+        case O_FALLSTEP: {
+            const char *name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
+            double *v = c == O_FALLTIME ? &ra.fall_time : &ra.fall_step;
+            if (parse_quantity(name, optarg, DRAPE_DIM_TIME, v)) return 2;
+            if (!(*v > 0)) return usage_error("%s: must be positive, got %s", name, optarg);
+            break;
+        }
+        case O_MAXSTEPS: {
+            char *end;
+            errno = 0;
+            max_steps = strtol(optarg, &end, 10);
+            if (errno || *end || max_steps <= 0)
+                return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
+            break;
+        }
+        case O_MAXORDER:
+            if (drape_max_order_parse(optarg, &max_order) != 0)
+                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'%s", optarg, "");
+            break;
+        case O_FORMAT:
+            if (strcmp(optarg, "json") == 0) csv = 0;
+            else if (strcmp(optarg, "csv") == 0) csv = 1;
+            else return usage_error("--format: expected json or csv, got `%s'%s", optarg, "");
+            break;
+        case 'q': quiet = 1; break;
+        case 'h': fputs(run_usage, stdout); return 0;
+        default:
+            fputs("Try `drape run --help'.\n", stderr);
+            return drape_error_exit_status(DRAPE_E_USAGE);
+        }
+        if (c != O_RESUME && c != O_FORMAT && c != 'q' && c != 'j') run_opt = argv[optind - 1];
+    }
+    if (argc - optind > 1) return usage_error("run: one scene at a time, got `%s' and `%s'", argv[optind], argv[optind + 1]);
+    if (resume_dir && optind < argc)
+        return usage_error("--resume: no scene file with it (the run's is stored in %s/drape.h5), got `%s'",
+                           resume_dir, argv[optind]);
+    if (resume_dir && run_opt)
+        return usage_error("--resume: only --format and -q go with it (the run's options are "
+                           "stored in %s/drape.h5), got `%s'", resume_dir, run_opt);
+    /* the default scene and paths not found here: the data directories
+     * (cli_data.h; a resumed run's paths are stored absolute) */
+    char scene_buf[4096], fabric_buf[4096];
+    const char *scene_path = optind < argc ? argv[optind] : DEFAULT_SCENE;
+    if (!resume_dir) {
+        drape_error derr;
+        drape_error_clear(&derr);
+        if (drape_cli_data_find(scene_path, scene_buf, sizeof scene_buf, &derr) != 0 ||
+            (fabric_path && drape_cli_data_find(fabric_path, fabric_buf, sizeof fabric_buf, &derr) != 0)) {
+            drape_cli_print_error(&derr);
+            return drape_error_exit_status(derr.kind);
+        }
+        scene_path = scene_buf;
+        if (fabric_path) fabric_path = fabric_buf;
+    }
+    if (integrator) {
+        int ok = 0;
+        for (int i = 0; drape_integrator_names[i]; i++)
+            ok |= strcmp(drape_integrator_names[i], integrator) == 0;
+        if (!ok) return usage_error("--integrator: unknown integrator `%s'%s; see `drape run --help'", integrator, "");
+    }
+    if (form && strcmp(form, "consistent") && strcmp(form, "seed"))
+        return usage_error("--energy-form: expected consistent or seed, got `%s'%s", form, "");
+
+    ra.scene_path = scene_path;
+    ra.fabric_path = fabric_path;
+    ra.integrator = integrator;
+    ra.form = form;
+    ra.out_dir = out_dir;
+    ra.resume_dir = resume_dir;
+    ra.rtol = rtol;
+    ra.atol = atol;
+    ra.spacing = spacing;
+    ra.t_max = t_max;
+    ra.strain_limit = strain_limit;
+    ra.max_steps = max_steps;
+    ra.max_order = max_order;
+    ra.method = method;
+    ra.linsol = linsol;
+    ra.csv = csv;
+    ra.quiet = quiet;
+    if (resume_dir) return drape_cli_run_one(&ra, NULL);
+    return drape_cli_specimens_run(&ra);
+}
