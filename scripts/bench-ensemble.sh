@@ -137,8 +137,8 @@ def fmt(d):
     return "%.4f +- %.4f" % (d["dc"], d["dc_ci95"]) if d.get("dc_ci95") is not None else "%.4f" % d["dc"]
 rows = []
 cases = ["cotton-1cm", "cotton-poly-1cm", "jacket-1cm", "tablecloth-1cm", "cotton-2cm", "table-2cm"]
-lines = ["| case | accurate: n, DC +- 95 %, nodes | CPU s / specimen | fall: n, DC +- 95 %, nodes | CPU s / specimen | p_nodes (a) | DC diff (b) | CPU ratio (c) | a b c |",
-         "|---|---|---|---|---|---|---|---|---|"]
+lines = ["| case | accurate: n, DC +- 95 %, nodes | CPU s / specimen | fall: n, DC +- 95 %, nodes | CPU s / specimen | p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c) | a b c |",
+         "|---|---|---|---|---|---|---|---|---|---|"]
 for c in cases:
     cmp = load(c + "-compare.json")
     if not cmp:
@@ -148,10 +148,11 @@ for c in cases:
     b_ok = abs(cmp["dc_diff"]) <= 0.01 and (cmp["dc_in_ci95"] == 1 or r["dc_ci95"] is None
                                             or abs(cmp["dc_diff"]) <= r["dc_ci95"])
     c_ok = cmp["cpu_ratio"] is not None and cmp["cpu_ratio"] >= 50
-    lines.append("| %s | %d, %s, {%s} | %.1f | %d, %s, {%s} | %.2f | %.3f | %+.4f%s | %.0f | %s |" % (
+    lines.append("| %s | %d, %s, {%s} | %.1f | %d, %s, {%s} | %.2f | %.3f | %+.4f%s | %s | %.0f | %s |" % (
         c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"],
         o["n"], fmt(o), hist(o["nodes_hist"]), o["cpu_per_specimen_s"], cmp["p_nodes"],
-        cmp["dc_diff"], "" if cmp["dc_in_ci95"] else " (outside)", cmp["cpu_ratio"],
+        cmp["dc_diff"], "" if cmp["dc_in_ci95"] else " (outside)",
+        "%.4f" % cmp["p_dc_dist"] if cmp.get("p_dc_dist") is not None else "", cmp["cpu_ratio"],
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
 prov = []
 for c in cases:
@@ -180,8 +181,8 @@ if imex:
         prov.append("- `cotton-1cm-imex`: `%s` (drape %s, %s)" % (m.get("command", "?"), m.get("commit", "?"), m.get("date", "?")))
 # the fall against the scene's own integrator (arkode-imex, rtol 1e-4: what
 # `--method dynamic` runs), where that ensemble exists
-own = ["| case | imex: n, DC +- 95 %, nodes | CPU s / specimen | imex vs auto: p_nodes, p_mean | fall vs imex: p_nodes (a) | DC diff (b) | CPU ratio (c) | a b c |",
-       "|---|---|---|---|---|---|---|---|"]
+own = ["| case | imex: n, DC +- 95 %, nodes | CPU s / specimen | imex vs auto: p_nodes, p_mean | fall vs imex: p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c) | a b c |",
+       "|---|---|---|---|---|---|---|---|---|"]
 for c in cases:
     fc, ac = load(c + "-imex-fall-compare.json"), load(c + "-imex-compare.json")
     if not fc:
@@ -190,10 +191,11 @@ for c in cases:
     a_ok = fc["p_nodes"] >= 0.05
     b_ok = abs(fc["dc_diff"]) <= 0.01 and (fc["dc_in_ci95"] == 1 or abs(fc["dc_diff"]) <= (r["dc_ci95"] or 0))
     c_ok = fc["cpu_ratio"] is not None and fc["cpu_ratio"] >= 50
-    own.append("| %s | %d, %s, {%s} | %.1f | %s | %.3f | %+.4f%s | %.0f | %s |" % (
+    own.append("| %s | %d, %s, {%s} | %.1f | %s | %.3f | %+.4f%s | %s | %.0f | %s |" % (
         c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"],
         "%.3f, %.3f" % (ac["p_nodes"], ac["p_mean"]) if ac else "",
-        fc["p_nodes"], fc["dc_diff"], "" if fc["dc_in_ci95"] else " (outside)", fc["cpu_ratio"],
+        fc["p_nodes"], fc["dc_diff"], "" if fc["dc_in_ci95"] else " (outside)",
+        "%.4f" % fc["p_dc_dist"] if fc.get("p_dc_dist") is not None else "", fc["cpu_ratio"],
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
     m = meta(c + "-imex")
     if m and c != "cotton-1cm":

@@ -5,6 +5,9 @@
  *   p_nodes      exact test of the two node-count histograms (Freeman-
  *                Halton, ensemble.h): small p = different distributions
  *   p_mean       Welch's t test of the mean DCs
+ *   p_dc_dist    two-sample Kolmogorov-Smirnov test of the DC
+ *                distributions (permutation p value, ensemble.h): means
+ *                can agree while the rest states differ
  *   dc_diff      OTHER's mean DC minus REFERENCE's
  *   dc_in_ci95   1 when |dc_diff| <= REFERENCE's dc_ci95
  *   cpu_ratio    REFERENCE's CPU seconds per specimen / OTHER's
@@ -32,7 +35,8 @@ static const char compare_usage[] =
     "Compare two drape tests: the results of `drape run` (one JSON object\n"
     "each, e.g. ensembles of --specimens N).  Prints one JSON object with\n"
     "p_nodes (exact test of the node-count histograms), p_mean (Welch's t test\n"
-    "of the mean DCs), dc_diff (OTHER - REFERENCE), dc_in_ci95 (|dc_diff| within\n"
+    "of the mean DCs), p_dc_dist (Kolmogorov-Smirnov test of the DC\n"
+    "distributions, by permutation), dc_diff (OTHER - REFERENCE), dc_in_ci95 (|dc_diff| within\n"
     "REFERENCE's 95 % half-width), cpu_ratio (REFERENCE's CPU seconds per\n"
     "specimen over OTHER's) and both inputs' n, dc, dc_sd, dc_ci95, nodes_hist,\n"
     "cpu_per_specimen_s.  A p value below 0.05 means the two differ at the\n"
@@ -43,6 +47,8 @@ static const char compare_usage[] =
 
 typedef struct side {
     drape_ensemble_stats st;
+    double dc[DRAPE_SCENE_SPECIMENS_MAX]; /* the specimens' finite DCs */
+    int ndc;
     double cpu_per;
     json_object *hist;
 } side;
@@ -87,6 +93,9 @@ static int load(const char *path, side *s, json_object **keep, drape_error *err)
         n = 1;
     }
     drape_ensemble_stats_compute(dcs, nodes, n, &s->st);
+    s->ndc = 0;
+    for (int k = 0; k < n; k++)
+        if (isfinite(dcs[k])) s->dc[s->ndc++] = dcs[k];
     if (s->st.n == 0)
         return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, "specimens",
                                "no specimen with a drape coefficient");
@@ -147,6 +156,7 @@ int drape_cli_compare(int argc, char **argv)
                            dnum(drape_ensemble_exact_p(a.st.hist, b.st.hist,
                                                        DRAPE_ENSEMBLE_MAX_NODES + 1)));
     json_object_object_add(o, "p_mean", dnum(drape_ensemble_welch_p(&a.st, &b.st)));
+    json_object_object_add(o, "p_dc_dist", dnum(drape_ensemble_ks_p(a.dc, a.ndc, b.dc, b.ndc)));
     json_object_object_add(o, "dc_diff", dnum(diff));
     json_object_object_add(o, "dc_in_ci95",
                            isfinite(a.st.dc_ci95) ? json_object_new_int(fabs(diff) <= a.st.dc_ci95)

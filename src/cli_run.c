@@ -205,6 +205,7 @@ static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
     eo.dyn_dt = fall_step;
     eo.dyn_ke_frac = fall_swing; /* and on while the cloth still swings */
     eo.dyn_time_max = DRAPE_FALL_TIME_MAX * fall_time;
+    eo.dyn_dt_swing = DRAPE_FALL_SWING_STEP * fall_step; /* at a longer step */
     /* after a fall a limp cloth can still be far from rest: the settling
      * may need more than the static method's iterations (measured: a
      * ponte-roma specimen, 704) */

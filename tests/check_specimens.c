@@ -14,6 +14,7 @@
 #include <libxml/xpath.h>
 #include <libxml/xpathInternals.h>
 
+#include "drape/ensemble.h"
 #include "testutil.h"
 
 #define CAP (1 << 20)
@@ -232,6 +233,45 @@ START_TEST(test_scene_keys)
 }
 END_TEST
 
+/* `drape compare` of two hand-written results of 24 specimens: the same
+ * node histograms and DC means 0.005 apart, but one sample in two rest
+ * states (0.40, 0.45) and the other in one between them (0.43).  dc_diff by hand; the exact test of
+ * equal histograms is 1; the DC distributions are told apart by the
+ * Kolmogorov-Smirnov test (p_dc_dist, the value of the library's test of
+ * the same samples) where Welch's test of the means is not significant. */
+START_TEST(test_compare_distributions)
+{
+    char a[4096] = "{\"specimens\": [", b[4096] = "{\"specimens\": [";
+    double da[24], db[24];
+    for (int k = 0; k < 24; k++) {
+        da[k] = k < 12 ? 0.40 : 0.45; /* two states */
+        db[k] = 0.43;                 /* one */
+        char e[200];
+        snprintf(e, sizeof e, "%s{\"seed\": %d, \"dc\": %.10f, \"nodes\": 4}", k ? ", " : "", k + 1, da[k]);
+        strcat(a, e);
+        snprintf(e, sizeof e, "%s{\"seed\": %d, \"dc\": %.10f, \"nodes\": 4}", k ? ", " : "", k + 1, db[k]);
+        strcat(b, e);
+    }
+    strcat(a, "], \"cpu_s\": 24}");
+    strcat(b, "], \"cpu_s\": 12}");
+    char pa[512], pb[512], args[1200];
+    snprintf(pa, sizeof pa, "%s", tu_write_file("ref.json", a));
+    snprintf(pb, sizeof pb, "%s", tu_write_file("other.json", b));
+    snprintf(args, sizeof args, "compare %s %s", pa, pb);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_ptr_nonnull(o);
+    ck_assert_double_eq_tol(jnum(o, "dc_diff"), 0.005, 1e-9);
+    ck_assert_double_eq_tol(jnum(o, "p_nodes"), 1.0, 1e-12);
+    ck_assert_double_eq_tol(jnum(o, "cpu_ratio"), 2.0, 1e-9);
+    double p = jnum(o, "p_dc_dist");
+    ck_assert_double_eq_tol(p, drape_ensemble_ks_p(da, 24, db, 24), 1e-5);
+    ck_assert_msg(p < 0.05 && jnum(o, "p_mean") > 0.05, "p_dc_dist %g, p_mean %g", p,
+                  jnum(o, "p_mean"));
+    json_object_put(o);
+}
+END_TEST
+
 Suite *specimens_suite(void)
 {
     Suite *s = suite_create("specimens");
@@ -241,6 +281,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_ensemble_csv);
     tcase_add_test(tc, test_ensemble_failures);
     tcase_add_test(tc, test_scene_keys);
+    tcase_add_test(tc, test_compare_distributions);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -74,6 +74,9 @@ typedef struct drape_equilibrium_opts {
                             largest value so far (the cloth still swings),
                             up to dyn_time_max; 0 = stop at dyn_time */
     double dyn_time_max; /* s: the longest such dynamics (0 = 4 dyn_time) */
+    double dyn_dt_swing; /* s: the step of the dynamics past dyn_time (the
+                            slow swing after the folds have formed); 0 =
+                            dyn_dt */
     int dyn_only;        /* 1: return after the damped dynamics (status
                             DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
@@ -115,6 +118,8 @@ typedef struct drape_equilibrium_result {
     int iterations;       /* iterations of the loop (each factorises once,
                              twice when Newton falls back to Hc) */
     int dyn_steps;        /* damped dynamics steps */
+    int dyn_refused;      /* swing steps at dyn_dt_swing refused because the
+                             total energy rose (then dyn_dt on) */
     double dyn_end;       /* s: when the damped dynamics ended */
     int ptc_steps;        /* accepted PTC steps */
     int newton_steps;     /* accepted Newton steps */

@@ -197,6 +197,10 @@ int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
  * (docs/ensemble.md, "The swing criterion"). */
 #define DRAPE_FALL_SWING 0.02
 #define DRAPE_FALL_TIME_MAX 4.0
+/* Past t_fall the folds have formed and the skirt swings at its pendulum
+ * frequency: the step is DRAPE_FALL_SWING_STEP h_step there (about 100
+ * steps per pendulum period; docs/ensemble.md, "The step of the swing"). */
+#define DRAPE_FALL_SWING_STEP 2.0
 /* Iterations of the static solver after the fall (the static method keeps
  * its 500; docs/ensemble.md). */
 #define DRAPE_FALL_MAX_ITERS 2000
