@@ -272,6 +272,24 @@ START_TEST(test_compare_distributions)
 }
 END_TEST
 
+/* The fabric's warnings about its bias curve come only with the bias term:
+ * a run in the seed's model (--terms without bias) does not print them, a
+ * run with it does; the other warnings (slope jumps of the warp curve)
+ * come either way. */
+START_TEST(test_bias_warnings_with_term)
+{
+    const char *base = "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+                       "--fabric ../fabrics/polyester-tablecloth-wang.yaml";
+    char args[512];
+    snprintf(args, sizeof args, "%s --terms stretch,bend,shear,gravity", base);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_ptr_null(strstr(err, "bending.bias"));
+    ck_assert_ptr_nonnull(strstr(err, "bending.warp[1]: warning"));
+    ck_assert_msg(tu_run_drape(base, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_ptr_nonnull(strstr(err, "bending.bias: warning"));
+}
+END_TEST
+
 Suite *specimens_suite(void)
 {
     Suite *s = suite_create("specimens");
@@ -282,6 +300,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_ensemble_failures);
     tcase_add_test(tc, test_scene_keys);
     tcase_add_test(tc, test_compare_distributions);
+    tcase_add_test(tc, test_bias_warnings_with_term);
     suite_add_tcase(s, tc);
     return s;
 }
