@@ -23,6 +23,9 @@ case $O in /*) ;; *) O=$ROOT/$O ;; esac
 DRAPE=${DRAPE:-$ROOT/drape}
 SUITES=${VALGRIND_SUITES:-"yamldoc units fit fabric scene lattice alloc"}
 LOGS=$O/valgrind
+# drape executes itself again to set OMP_THREAD_LIMIT when it is not set
+# (src/main.c); under valgrind that second program would run natively
+export OMP_THREAD_LIMIT=1
 VG="valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible --errors-for-leak-kinds=definite,indirect,possible --track-origins=yes --error-exitcode=99 --suppressions=$ROOT/scripts/valgrind.supp"
 
 command -v valgrind >/dev/null 2>&1 || {

@@ -3,7 +3,9 @@
 #include <dlfcn.h>
 #include <getopt.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <gsl/gsl_errno.h>
 
@@ -51,6 +53,10 @@ static const char usage_text[] =
     "drape's data directory: $DRAPE_DATA if set, else the checkout the binary\n"
     "was built in, else the installed one; `drape --version' prints them.\n"
     "\n"
+    "Threads: drape runs in one thread (ensembles and batches run processes\n"
+    "in parallel, -j); it sets OMP_THREAD_LIMIT=1 for CHOLMOD's OpenMP loops\n"
+    "unless the environment sets it.\n"
+    "\n"
     "Exit status:\n"
     "  0    success\n"
     "  1    invalid input (malformed YAML, bad key, type, unit or value)\n"
@@ -97,8 +103,26 @@ static void single_threaded(void)
     }
 }
 
+/* CHOLMOD's supernodal kernels ask for CHOLMOD_OMP_NUM_THREADS (4, fixed
+ * when Debian built it) in the num_threads clauses of their OpenMP loops,
+ * which omp_set_num_threads does not lower; only the thread limit does,
+ * and libgomp reads OMP_THREAD_LIMIT once, when it loads.  Measured on a
+ * 0.5 cm Cusick specimen (5700 unknowns, supernodal): 7.6 s of CPU (3.0 s
+ * of it in the kernel, 1.5 million futex calls) and 7.2 s wall with the
+ * threads, 2.5 s and 2.5 s with OMP_THREAD_LIMIT=1, the same drape.  So
+ * unless the caller set the limit, drape sets it to 1 and executes itself
+ * again (once: the limit is then set); without /proc it goes on as it is.
+ * docs/performance.md, "Threads". */
+static void limit_openmp(char **argv)
+{
+    if (getenv("OMP_THREAD_LIMIT")) return;
+    if (setenv("OMP_THREAD_LIMIT", "1", 1) != 0) return;
+    execv("/proc/self/exe", argv);
+}
+
 int main(int argc, char **argv)
 {
+    limit_openmp(argv);
     gsl_set_error_handler_off(); /* GSL's default handler aborts */
     single_threaded();
 
