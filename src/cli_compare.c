@@ -9,6 +9,9 @@
  *                distributions (permutation p value, ensemble.h): means
  *                can agree while the rest states differ
  *   dc_diff      OTHER's mean DC minus REFERENCE's
+ *   dc_diff_ci95 half-width of the 95 % interval of that difference
+ *                (Welch): the uncertainty of both means, not only the
+ *                reference's
  *   dc_in_ci95   1 when |dc_diff| <= REFERENCE's dc_ci95
  *   cpu_ratio    REFERENCE's CPU seconds per specimen / OTHER's
  *
@@ -36,8 +39,9 @@ static const char compare_usage[] =
     "each, e.g. ensembles of --specimens N).  Prints one JSON object with\n"
     "p_nodes (exact test of the node-count histograms), p_mean (Welch's t test\n"
     "of the mean DCs), p_dc_dist (Kolmogorov-Smirnov test of the DC\n"
-    "distributions, by permutation), dc_diff (OTHER - REFERENCE), dc_in_ci95 (|dc_diff| within\n"
-    "REFERENCE's 95 % half-width), cpu_ratio (REFERENCE's CPU seconds per\n"
+    "distributions, by permutation), dc_diff (OTHER - REFERENCE) with\n"
+    "dc_diff_ci95 (the 95 % half-width of that difference, Welch),\n"
+    "dc_in_ci95 (|dc_diff| within REFERENCE's 95 % half-width), cpu_ratio (REFERENCE's CPU seconds per\n"
     "specimen over OTHER's) and both inputs' n, dc, dc_sd, dc_ci95, nodes_hist,\n"
     "cpu_per_specimen_s.  A p value below 0.05 means the two differ at the\n"
     "5 % level (docs/ensemble.md).\n"
@@ -158,6 +162,7 @@ int drape_cli_compare(int argc, char **argv)
     json_object_object_add(o, "p_mean", dnum(drape_ensemble_welch_p(&a.st, &b.st)));
     json_object_object_add(o, "p_dc_dist", dnum(drape_ensemble_ks_p(a.dc, a.ndc, b.dc, b.ndc)));
     json_object_object_add(o, "dc_diff", dnum(diff));
+    json_object_object_add(o, "dc_diff_ci95", dnum(drape_ensemble_welch_ci95(&a.st, &b.st)));
     json_object_object_add(o, "dc_in_ci95",
                            isfinite(a.st.dc_ci95) ? json_object_new_int(fabs(diff) <= a.st.dc_ci95)
                                                   : NULL);

@@ -153,6 +153,17 @@ double drape_ensemble_welch_p(const drape_ensemble_stats *a,
     return 2.0 * gsl_cdf_tdist_Q(fabs(t), dof);
 }
 
+double drape_ensemble_welch_ci95(const drape_ensemble_stats *a,
+                                 const drape_ensemble_stats *b)
+{
+    if (a->n < 2 || b->n < 2) return NAN;
+    double va = a->dc_sd * a->dc_sd / a->n, vb = b->dc_sd * b->dc_sd / b->n;
+    if (!(va + vb > 0.0)) return NAN;
+    double dof = (va + vb) * (va + vb) /
+                 (va * va / (a->n - 1) + vb * vb / (b->n - 1));
+    return gsl_cdf_tdist_Pinv(0.975, dof) * sqrt(va + vb);
+}
+
 /* D of two sorted samples. */
 static double ks_sorted(const double *a, int na, const double *b, int nb)
 {

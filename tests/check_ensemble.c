@@ -151,6 +151,17 @@ START_TEST(test_welch_example)
     double p = drape_ensemble_welch_p(&s1, &s2);
     ck_assert_msg(fabs(p - 0.021) < 0.0015, "p = %.17g", p);
     ck_assert_close_rel(drape_ensemble_welch_p(&s2, &s1), p, 1e-12);
+    /* the interval of the difference and the test agree: moving the second
+     * sample until its mean lies exactly one half-width from the first
+     * gives p = 0.05 (the spreads, hence the half-width, do not change) */
+    double h = drape_ensemble_welch_ci95(&s1, &s2), a3[15];
+    ck_assert(h > 0.0 && h < fabs(s2.dc_mean - s1.dc_mean)); /* p < 0.05 above */
+    for (int k = 0; k < 15; k++) a3[k] = a2[k] - (s2.dc_mean - s1.dc_mean) + h;
+    drape_ensemble_stats s3;
+    drape_ensemble_stats_compute(a3, nd, 15, &s3);
+    ck_assert_close_rel(drape_ensemble_welch_ci95(&s1, &s3), h, 1e-9);
+    ck_assert_msg(fabs(drape_ensemble_welch_p(&s1, &s3) - 0.05) < 1e-9, "p = %.12g",
+                  drape_ensemble_welch_p(&s1, &s3));
 }
 END_TEST
 

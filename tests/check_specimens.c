@@ -262,6 +262,10 @@ START_TEST(test_compare_distributions)
     json_object *o = json_tokener_parse(out);
     ck_assert_ptr_nonnull(o);
     ck_assert_double_eq_tol(jnum(o, "dc_diff"), 0.005, 1e-9);
+    /* Welch's interval of the difference by hand: sd 0.025 sqrt(24/23) of
+     * the two-state sample, none in the other, 23 degrees of freedom,
+     * t_{0.975, 23} = 2.068658 (tables): 2.068658 x 0.0052129 = 0.010784 */
+    ck_assert_double_eq_tol(jnum(o, "dc_diff_ci95"), 0.010784, 2e-6);
     ck_assert_double_eq_tol(jnum(o, "p_nodes"), 1.0, 1e-12);
     ck_assert_double_eq_tol(jnum(o, "cpu_ratio"), 2.0, 1e-9);
     double p = jnum(o, "p_dc_dist");

@@ -67,6 +67,13 @@ double drape_ensemble_exact_p(const int *a, const int *b, int k);
 double drape_ensemble_welch_p(const drape_ensemble_stats *a,
                               const drape_ensemble_stats *b);
 
+/* Half-width of the 95 % confidence interval of the difference of the
+ * two means (Welch: t_{0.975, nu} sqrt(s_a^2/n_a + s_b^2/n_b), nu the
+ * Welch-Satterthwaite degrees of freedom); |difference| <= it exactly when
+ * drape_ensemble_welch_p >= 0.05.  NaN where welch_p is. */
+double drape_ensemble_welch_ci95(const drape_ensemble_stats *a,
+                                 const drape_ensemble_stats *b);
+
 /* Largest sample for drape_ensemble_ks_p (each side). */
 #define DRAPE_ENSEMBLE_KS_MAX 1000
 /* Random splits of the pooled sample in drape_ensemble_ks_p. */
