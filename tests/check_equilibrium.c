@@ -513,6 +513,23 @@ START_TEST(test_cusick_2cm_matches_dynamics)
 }
 END_TEST
 
+/* The independent reference of the fall tests: the chain's motion to time
+ * t by cvode-bdf at rtol 1e-10 (the caller frees sr). */
+static void chain_tight(drape_model *m, double t, drape_sim_result *sr)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    drape_sim_opts so;
+    drape_sim_opts_default(&so);
+    snprintf(so.integrator, sizeof so.integrator, "cvode-bdf");
+    so.rtol = 1e-10;
+    so.atol = 1e-12;
+    so.t_max = t;
+    so.max_order = 5;
+    so.strain_limit = 0.0; /* the soft test chain stretches 25 % as it swings */
+    ck_assert_msg(drape_sim_run(m, &so, NULL, NULL, sr, &err) == 0, "%s", err.msg);
+}
+
 /* The fall method's dynamics (dyn_time, dyn_only: the state after the
  * fall, no minimisation) against an independent tight integration: the
  * chain released horizontally swings down for 0.2 s; cvode-bdf at rtol
@@ -527,16 +544,8 @@ START_TEST(test_fall_converges)
     drape_model *m = chain_model(L);
     drape_error err;
     drape_error_clear(&err);
-    drape_sim_opts so;
-    drape_sim_opts_default(&so);
-    snprintf(so.integrator, sizeof so.integrator, "cvode-bdf");
-    so.rtol = 1e-10;
-    so.atol = 1e-12;
-    so.t_max = 0.2;
-    so.max_order = 5;
-    so.strain_limit = 0.0; /* the soft test chain stretches 25 % as it swings */
     drape_sim_result sr;
-    ck_assert_msg(drape_sim_run(m, &so, NULL, NULL, &sr, &err) == 0, "%s", err.msg);
+    chain_tight(m, 0.2, &sr);
     double e[3], drop = 0;
     for (int i = 0; i < CHAIN_N; i++) drop = fmax(drop, fabs(sr.x[3 * i + 2] - L->xinit[3 * i + 2]));
     ck_assert(drop > 0.05); /* it has swung down several centimetres */
@@ -624,16 +633,8 @@ START_TEST(test_fall_swing_step)
     drape_model *m = chain_model(L);
     drape_error err;
     drape_error_clear(&err);
-    drape_sim_opts so;
-    drape_sim_opts_default(&so);
-    snprintf(so.integrator, sizeof so.integrator, "cvode-bdf");
-    so.rtol = 1e-10;
-    so.atol = 1e-12;
-    so.t_max = 0.3;
-    so.max_order = 5;
-    so.strain_limit = 0.0;
     drape_sim_result sr;
-    ck_assert_msg(drape_sim_run(m, &so, NULL, NULL, &sr, &err) == 0, "%s", err.msg);
+    chain_tight(m, 0.3, &sr);
     double drop = 0;
     for (int i = 0; i < CHAIN_N; i++) drop = fmax(drop, fabs(sr.x[3 * i + 2] - L->xinit[3 * i + 2]));
     double e[3];
