@@ -1,9 +1,9 @@
 /* cli_run.c: one run of `drape run` (its command line: cli_run_args.c):
  * load a scene and its fabric, build the lattice and model, integrate or
  * solve, measure, and print one JSON object (or a CSV header and row) on
- * stdout.  Frames (OBJ, HDF5 +
- * XDMF) are written only with --out DIR.  Progress goes to stderr only when
- * it is a terminal.  Keys of the result are a contract (issue 3).
+ * stdout.  Frames (OBJ, HDF5 + XDMF) are written only with --out DIR.
+ * Progress goes to stderr only when it is a terminal.  Keys of the result
+ * are a contract (issue 3).
  *
  * Interruption and resume (issue 7; docs/reliability.md): SIGINT and
  * SIGTERM set a flag (the handler does nothing else) that the driver polls

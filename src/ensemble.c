@@ -141,27 +141,34 @@ double drape_ensemble_exact_p(const int *a, const int *b, int k)
     return c.p > 1.0 ? 1.0 : c.p;
 }
 
+/* Welch: the standard error of the difference of the means and the
+ * Welch-Satterthwaite degrees of freedom; -1 where undefined (fewer than
+ * two members, or no spread on either side). */
+static int welch(const drape_ensemble_stats *a, const drape_ensemble_stats *b, double *se,
+                 double *dof)
+{
+    if (a->n < 2 || b->n < 2) return -1;
+    double va = a->dc_sd * a->dc_sd / a->n, vb = b->dc_sd * b->dc_sd / b->n;
+    if (!(va + vb > 0.0)) return -1;
+    *se = sqrt(va + vb);
+    *dof = (va + vb) * (va + vb) / (va * va / (a->n - 1) + vb * vb / (b->n - 1));
+    return 0;
+}
+
 double drape_ensemble_welch_p(const drape_ensemble_stats *a,
                               const drape_ensemble_stats *b)
 {
-    if (a->n < 2 || b->n < 2) return NAN;
-    double va = a->dc_sd * a->dc_sd / a->n, vb = b->dc_sd * b->dc_sd / b->n;
-    if (!(va + vb > 0.0)) return NAN;
-    double t = (a->dc_mean - b->dc_mean) / sqrt(va + vb);
-    double dof = (va + vb) * (va + vb) /
-                 (va * va / (a->n - 1) + vb * vb / (b->n - 1));
-    return 2.0 * gsl_cdf_tdist_Q(fabs(t), dof);
+    double se, dof;
+    if (welch(a, b, &se, &dof) != 0) return NAN;
+    return 2.0 * gsl_cdf_tdist_Q(fabs(a->dc_mean - b->dc_mean) / se, dof);
 }
 
 double drape_ensemble_welch_ci95(const drape_ensemble_stats *a,
                                  const drape_ensemble_stats *b)
 {
-    if (a->n < 2 || b->n < 2) return NAN;
-    double va = a->dc_sd * a->dc_sd / a->n, vb = b->dc_sd * b->dc_sd / b->n;
-    if (!(va + vb > 0.0)) return NAN;
-    double dof = (va + vb) * (va + vb) /
-                 (va * va / (a->n - 1) + vb * vb / (b->n - 1));
-    return gsl_cdf_tdist_Pinv(0.975, dof) * sqrt(va + vb);
+    double se, dof;
+    if (welch(a, b, &se, &dof) != 0) return NAN;
+    return gsl_cdf_tdist_Pinv(0.975, dof) * se;
 }
 
 /* D of two sorted samples. */

@@ -530,6 +530,29 @@ static void chain_tight(drape_model *m, double t, drape_sim_result *sr)
     ck_assert_msg(drape_sim_run(m, &so, NULL, NULL, sr, &err) == 0, "%s", err.msg);
 }
 
+/* The largest height change of the chain from its rest to x, m. */
+static double chain_drop(const drape_lattice *L, const double *x)
+{
+    double drop = 0;
+    for (int i = 0; i < CHAIN_N; i++) drop = fmax(drop, fabs(x[3 * i + 2] - L->xinit[3 * i + 2]));
+    return drop;
+}
+
+/* The fall's dynamics alone (o->dyn_only set here) from the chain's rest:
+ * *r (the caller frees it) and the largest position error against xref, m. */
+static double chain_fall_error(drape_model *m, const drape_lattice *L, drape_equilibrium_opts *o,
+                               const double *xref, drape_equilibrium_result *r)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    o->dyn_only = 1;
+    ck_assert_msg(drape_equilibrium_solve(m, L->xinit, o, r, &err) == 0, "%s", err.msg);
+    ck_assert_int_eq(r->status, DRAPE_EQ_DYN_ONLY);
+    double e = 0;
+    for (int k = 0; k < 3 * L->n; k++) e = fmax(e, fabs(r->x[k] - xref[k]));
+    return e;
+}
+
 /* The fall method's dynamics (dyn_time, dyn_only: the state after the
  * fall, no minimisation) against an independent tight integration: the
  * chain released horizontally swings down for 0.2 s; cvode-bdf at rtol
@@ -542,12 +565,9 @@ START_TEST(test_fall_converges)
     const double dir[3] = {1.0, 0.0, 0.0};
     drape_lattice *L = chain_new(dir);
     drape_model *m = chain_model(L);
-    drape_error err;
-    drape_error_clear(&err);
     drape_sim_result sr;
     chain_tight(m, 0.2, &sr);
-    double e[3], drop = 0;
-    for (int i = 0; i < CHAIN_N; i++) drop = fmax(drop, fabs(sr.x[3 * i + 2] - L->xinit[3 * i + 2]));
+    double e[3], drop = chain_drop(L, sr.x);
     ck_assert(drop > 0.05); /* it has swung down several centimetres */
     for (int q = 0; q < 3; q++) {
         drape_equilibrium_opts o;
@@ -555,13 +575,9 @@ START_TEST(test_fall_converges)
         if (_i == 1) o.clamp_k[0] = o.clamp_k[1] = CHAIN_K;
         o.dyn_time = 0.2;
         o.dyn_dt = 0.004 / (1 << q);
-        o.dyn_only = 1;
         drape_equilibrium_result r;
-        ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r, &err) == 0, "%s", err.msg);
-        ck_assert_int_eq(r.status, DRAPE_EQ_DYN_ONLY);
+        e[q] = chain_fall_error(m, L, &o, sr.x, &r);
         ck_assert_int_eq(r.dyn_steps, 50 << q);
-        e[q] = 0;
-        for (int k = 0; k < 3 * L->n; k++) e[q] = fmax(e[q], fabs(r.x[k] - sr.x[k]));
         drape_equilibrium_result_free(&r);
     }
     if (_i == 0) {
@@ -631,13 +647,9 @@ START_TEST(test_fall_swing_step)
     const double dir[3] = {1.0, 0.0, 0.0};
     drape_lattice *L = chain_new(dir);
     drape_model *m = chain_model(L);
-    drape_error err;
-    drape_error_clear(&err);
     drape_sim_result sr;
     chain_tight(m, 0.3, &sr);
-    double drop = 0;
-    for (int i = 0; i < CHAIN_N; i++) drop = fmax(drop, fabs(sr.x[3 * i + 2] - L->xinit[3 * i + 2]));
-    double e[3];
+    double drop = chain_drop(L, sr.x), e[3];
     int steps[3];
     for (int c = 0; c < 3; c++) { /* 2 ms then 4 ms; 2 ms; 4 ms */
         drape_equilibrium_opts o;
@@ -647,14 +659,11 @@ START_TEST(test_fall_swing_step)
         o.dyn_dt_swing = c == 0 ? 0.004 : 0.0;
         o.dyn_ke_frac = 0.05;
         o.dyn_time_max = 0.3;
-        o.dyn_only = 1;
         drape_equilibrium_result r;
-        ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r, &err) == 0, "%s", err.msg);
+        e[c] = chain_fall_error(m, L, &o, sr.x, &r);
         ck_assert_double_eq_tol(r.dyn_end, 0.3, 1e-12);
         ck_assert_int_eq(r.dyn_refused, 0); /* the energy falls at 4 ms too */
         steps[c] = r.dyn_steps;
-        e[c] = 0;
-        for (int k = 0; k < 3 * L->n; k++) e[c] = fmax(e[c], fabs(r.x[k] - sr.x[k]));
         drape_equilibrium_result_free(&r);
     }
     ck_assert_int_eq(steps[0], 125);
