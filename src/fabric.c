@@ -33,7 +33,6 @@
 
 #include <ctype.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,6 +40,7 @@
 #include "drape/alloc.h"
 #include "drape/units.h"
 #include "drape/yamldoc.h"
+#include "yread.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -60,175 +60,6 @@
 #define DRAPE_FABRIC_KES_G0 (0.5 * M_PI / 180.0)      /* rad */
 #define DRAPE_FABRIC_KES_G5 (5.0 * M_PI / 180.0)      /* rad */
 
-typedef struct loader {
-    const drape_ydoc *doc;
-    drape_error *err;
-    drape_warn_fn warn;
-    void *warn_ctx;
-} loader;
-
-static int fail(loader *L, const drape_ynode *node, const char *path,
-                drape_error_kind kind, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 5, 6)))
-#endif
-    ;
-
-static int fail(loader *L, const drape_ynode *node, const char *path,
-                drape_error_kind kind, const char *fmt, ...)
-{
-    char msg[DRAPE_ERROR_MSG_MAX];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    return drape_ynode_error(L->err, L->doc, node, path, kind, "%s", msg);
-}
-
-static void warn_at(loader *L, const drape_ynode *node, const char *path,
-                    const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
-static void warn_at(loader *L, const drape_ynode *node, const char *path,
-                    const char *fmt, ...)
-{
-    if (!L->warn) return;
-    char msg[DRAPE_ERROR_MSG_MAX];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    drape_error w;
-    drape_error_clear(&w);
-    drape_error_set(&w, DRAPE_OK, L->doc->path, node ? node->line : 0,
-                    node ? node->column : 0, path, "%s", msg);
-    L->warn(L->warn_ctx, &w);
-}
-
-/* Append src to out (capacity n), truncating. */
-static void append(char *out, size_t n, const char *src)
-{
-    size_t k = strlen(out), m = strlen(src);
-    if (k + 1 >= n) return;
-    if (m > n - 1 - k) m = n - 1 - k;
-    memcpy(out + k, src, m);
-    out[k + m] = 0;
-}
-
-/* path + "." + key, or key alone at the root. */
-static void join(char *out, size_t n, const char *path, const char *key)
-{
-    out[0] = 0;
-    append(out, n, path);
-    if (path[0]) append(out, n, ".");
-    append(out, n, key);
-}
-
-/* path + "[idx]" + rest. */
-static void indexed(char *out, size_t n, const char *path, long idx,
-                    const char *rest)
-{
-    char b[32];
-    snprintf(b, sizeof b, "[%ld]", idx);
-    out[0] = 0;
-    append(out, n, path);
-    append(out, n, b);
-    append(out, n, rest);
-}
-
-static const char *type_name(const drape_ynode *n)
-{
-    switch (n->type) {
-    case DRAPE_YNODE_SCALAR: return "a scalar";
-    case DRAPE_YNODE_SEQUENCE: return "a list";
-    case DRAPE_YNODE_MAPPING: return "a mapping";
-    }
-    return "?";
-}
-
-/* The value of `key` in `map`, which must be present. */
-static const drape_ynode *need(loader *L, const drape_ynode *map,
-                               const char *path, const char *key)
-{
-    const drape_ynode *v = drape_ynode_get(map, key, NULL);
-    if (!v) {
-        char kp[DRAPE_ERROR_KEY_MAX];
-        join(kp, sizeof kp, path, key);
-        fail(L, map, kp, DRAPE_E_INPUT, "missing key `%s`", key);
-    }
-    return v;
-}
-
-static int need_type(loader *L, const drape_ynode *n, const char *path,
-                     drape_ynode_type type, const char *what)
-{
-    if (n->type == type) return 0;
-    if (n->type == DRAPE_YNODE_SCALAR)
-        return fail(L, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"", what,
-                    n->scalar);
-    return fail(L, n, path, DRAPE_E_INPUT, "expected %s, got %s", what,
-                type_name(n));
-}
-
-/* A plain number (no unit): decimal with optional exponent, finite. */
-static int get_number(loader *L, const drape_ynode *n, const char *path,
-                      double *out)
-{
-    if (need_type(L, n, path, DRAPE_YNODE_SCALAR, "a number")) return -1;
-    const char *s = n->scalar;
-    char *end;
-    int ok = s[0] != 0;
-    for (const char *p = s; *p && ok; p++)
-        if (!(isdigit((unsigned char)*p) || *p == '.' || *p == 'e' ||
-              *p == 'E' || *p == '+' || *p == '-'))
-            ok = 0; /* no hex, inf, nan, units */
-    double v = ok ? strtod(s, &end) : 0.0;
-    if (!ok || end == s || *end != 0)
-        return fail(L, n, path, DRAPE_E_INPUT, "expected a number, got \"%s\"",
-                    s);
-    if (!isfinite(v))
-        return fail(L, n, path, DRAPE_E_INPUT, "number out of range: \"%s\"",
-                    s);
-    *out = v;
-    return 0;
-}
-
-/* A quantity of dimension `dim`, converted to SI; must be finite and
- * (if positive != 0) > 0, or >= 0 when positive == 0. */
-static int get_quantity(loader *L, const drape_ynode *n, const char *path,
-                        drape_dim dim, int positive, double *out)
-{
-    char why[256];
-    if (need_type(L, n, path, DRAPE_YNODE_SCALAR, "a quantity with a unit"))
-        return -1;
-    if (drape_units_parse(n->scalar, dim, out, why, sizeof why))
-        return fail(L, n, path, DRAPE_E_INPUT, "%s", why);
-    if (positive && !(*out > 0))
-        return fail(L, n, path, DRAPE_E_INPUT, "must be positive, got \"%s\"",
-                    n->scalar);
-    if (!positive && *out < 0)
-        return fail(L, n, path, DRAPE_E_INPUT,
-                    "must not be negative, got \"%s\"", n->scalar);
-    return 0;
-}
-
-static int get_text(loader *L, const drape_ynode *n, const char *path,
-                    char *buf, size_t cap, int nonempty)
-{
-    if (need_type(L, n, path, DRAPE_YNODE_SCALAR, "text")) return -1;
-    size_t len = strlen(n->scalar);
-    if (len >= cap)
-        return fail(L, n, path, DRAPE_E_INPUT, "too long (%zu bytes; at most "
-                    "%zu)", len, cap - 1);
-    if (nonempty && len == 0)
-        return fail(L, n, path, DRAPE_E_INPUT, "must not be empty");
-    memcpy(buf, n->scalar, len + 1);
-    return 0;
-}
-
 /* ------------------------------------------------------------ fits */
 
 /* The unit block of a fit: scales to SI for x and y. */
@@ -236,26 +67,6 @@ typedef struct fit_units {
     double sx, sy;
     char xname[64], yname[64]; /* as written, for messages */
 } fit_units;
-
-static int get_unit(loader *L, const drape_ynode *map, const char *path,
-                    const char *key, drape_dim dim, const char *what,
-                    double *scale, char *name, size_t nname)
-{
-    char kp[DRAPE_ERROR_KEY_MAX], why[256];
-    join(kp, sizeof kp, path, key);
-    const drape_ynode *n = need(L, map, path, key);
-    if (!n) return -1;
-    if (need_type(L, n, kp, DRAPE_YNODE_SCALAR, "a unit")) return -1;
-    drape_dim d;
-    if (drape_units_parse_unit(n->scalar, scale, &d, why, sizeof why))
-        return fail(L, n, kp, DRAPE_E_INPUT, "%s", why);
-    if (!drape_units_dim_eq(d, dim))
-        return fail(L, n, kp, DRAPE_E_INPUT,
-                    "`%s` is a unit of %s; expected a unit of %s", n->scalar,
-                    drape_units_dim_name(d), what);
-    snprintf(name, nname, "%s", n->scalar);
-    return 0;
-}
 
 static double horner(const drape_fit_piece *p, double x)
 {
@@ -273,117 +84,129 @@ static double horner_d1(const drape_fit_piece *p, double x)
 
 /* Read one list of pieces (`bending.warp`) into *fit in the file's units,
  * check it (MODEL.md 3.4), and convert it to SI. */
-static int get_fit(loader *L, const drape_ynode *list, const char *path,
-                   const fit_units *u, const char *yquantity, drape_fit *fit)
+static int get_fit(const drape_yread *r, const drape_ynode *list,
+                   const char *path, const fit_units *u,
+                   const char *yquantity, drape_fit *fit)
 {
     static const char *const piece_keys[] = {"from", "to", "poly", NULL};
     const drape_ynode *to_node[DRAPE_FIT_MAX_PIECES];
-    char kp[DRAPE_ERROR_KEY_MAX], pp[DRAPE_ERROR_KEY_MAX];
+    char kp[DRAPE_YREAD_PATH_MAX], pp[DRAPE_YREAD_PATH_MAX];
 
     memset(fit, 0, sizeof *fit);
-    if (need_type(L, list, path, DRAPE_YNODE_SEQUENCE,
-                  "a list of pieces {from, to, poly}"))
+    if (drape_yread_want(r, list, path, DRAPE_YNODE_SEQUENCE,
+                         "a list of pieces {from, to, poly}"))
         return -1;
     if (list->n == 0)
-        return fail(L, list, path, DRAPE_E_INPUT,
-                    "empty list: give at least one piece {from: 0, poly: "
-                    "[...]}");
+        return drape_yread_error(r, list, path, DRAPE_E_INPUT,
+                                 "empty list: give at least one piece "
+                                 "{from: 0, poly: [...]}");
     if (list->n > DRAPE_FIT_MAX_PIECES) {
-        indexed(pp, sizeof pp, path, DRAPE_FIT_MAX_PIECES, "");
-        return fail(L, list->items[DRAPE_FIT_MAX_PIECES], pp, DRAPE_E_INPUT,
-                    "too many pieces (%zu; at most %d)", list->n,
-                    DRAPE_FIT_MAX_PIECES);
+        drape_yread_item_path(pp, sizeof pp, path, DRAPE_FIT_MAX_PIECES);
+        return drape_yread_error(r, list->items[DRAPE_FIT_MAX_PIECES], pp,
+                                 DRAPE_E_INPUT,
+                                 "too many pieces (%zu; at most %d)", list->n,
+                                 DRAPE_FIT_MAX_PIECES);
     }
     fit->n = (int)list->n;
     for (size_t i = 0; i < list->n; i++) {
         const drape_ynode *pn = list->items[i];
         drape_fit_piece *p = &fit->p[i];
         int last = i + 1 == list->n;
-        indexed(pp, sizeof pp, path, (long)i, "");
-        if (need_type(L, pn, pp, DRAPE_YNODE_MAPPING,
-                      "a piece {from: ..., to: ..., poly: [...]}"))
+        drape_yread_item_path(pp, sizeof pp, path, i);
+        if (drape_yread_want(r, pn, pp, DRAPE_YNODE_MAPPING,
+                             "a piece {from: ..., to: ..., poly: [...]}") ||
+            drape_ynode_check_keys(r->doc, pn, pp, piece_keys, r->err))
             return -1;
-        if (drape_ynode_check_keys(L->doc, pn, pp, piece_keys, L->err))
-            return -1;
-        const drape_ynode *from = need(L, pn, pp, "from");
+        const drape_ynode *from =
+            drape_yread_need(r, pn, pp, "from", "from: 0");
         if (!from) return -1;
-        join(kp, sizeof kp, pp, "from");
-        if (get_number(L, from, kp, &p->from)) return -1;
-        if (p->from < 0)
-            return fail(L, from, kp, DRAPE_E_INPUT, "must not be negative, got "
-                        "%s", from->scalar);
+        drape_yread_path(kp, sizeof kp, pp, "from");
+        if (drape_yread_number(r, from, kp, DRAPE_YREAD_NONNEGATIVE, &p->from))
+            return -1;
         const drape_ynode *to = drape_ynode_get(pn, "to", NULL);
         to_node[i] = to;
         p->to = INFINITY;
         if (to) {
-            join(kp, sizeof kp, pp, "to");
-            if (get_number(L, to, kp, &p->to)) return -1;
+            drape_yread_path(kp, sizeof kp, pp, "to");
+            if (drape_yread_number(r, to, kp, DRAPE_YREAD_ANY, &p->to))
+                return -1;
             if (!(p->to > p->from))
-                return fail(L, to, kp, DRAPE_E_INPUT,
-                            "`to` (%s) must be greater than `from` (%s)",
-                            to->scalar, from->scalar);
+                return drape_yread_error(r, to, kp, DRAPE_E_INPUT,
+                                         "`to` (%s) must be greater than "
+                                         "`from` (%s)", to->scalar,
+                                         from->scalar);
         } else if (!last) {
-            return fail(L, pn, pp, DRAPE_E_INPUT,
-                        "missing key `to`: only the last piece may leave it "
-                        "out (it extends to infinity)");
+            return drape_yread_error(r, pn, pp, DRAPE_E_INPUT,
+                                     "missing key `to`: only the last piece "
+                                     "may leave it out (it extends to "
+                                     "infinity)");
         }
-        const drape_ynode *poly = need(L, pn, pp, "poly");
+        const drape_ynode *poly =
+            drape_yread_need(r, pn, pp, "poly", "poly: [0, 1]");
         if (!poly) return -1;
-        join(kp, sizeof kp, pp, "poly");
-        if (need_type(L, poly, kp, DRAPE_YNODE_SEQUENCE,
-                      "a list of coefficients in ascending powers"))
+        drape_yread_path(kp, sizeof kp, pp, "poly");
+        if (drape_yread_want(r, poly, kp, DRAPE_YNODE_SEQUENCE,
+                             "a list of coefficients in ascending powers"))
             return -1;
         if (poly->n == 0)
-            return fail(L, poly, kp, DRAPE_E_INPUT, "no coefficients");
+            return drape_yread_error(r, poly, kp, DRAPE_E_INPUT,
+                                     "no coefficients");
         if (poly->n > DRAPE_FIT_MAX_COEFS)
-            return fail(L, poly, kp, DRAPE_E_INPUT,
-                        "too many coefficients (%zu; at most %d, degree %d)",
-                        poly->n, DRAPE_FIT_MAX_COEFS, DRAPE_FIT_MAX_COEFS - 1);
+            return drape_yread_error(r, poly, kp, DRAPE_E_INPUT,
+                                     "too many coefficients (%zu; at most %d, "
+                                     "degree %d)", poly->n,
+                                     DRAPE_FIT_MAX_COEFS,
+                                     DRAPE_FIT_MAX_COEFS - 1);
         p->ncoef = (int)poly->n;
         for (size_t k = 0; k < poly->n; k++) {
-            char cp[DRAPE_ERROR_KEY_MAX];
-            indexed(cp, sizeof cp, kp, (long)k, "");
-            if (get_number(L, poly->items[k], cp, &p->c[k])) return -1;
+            char cp[DRAPE_YREAD_PATH_MAX];
+            drape_yread_item_path(cp, sizeof cp, kp, k);
+            if (drape_yread_number(r, poly->items[k], cp, DRAPE_YREAD_ANY,
+                                   &p->c[k]))
+                return -1;
         }
         /* placement */
-        if (i == 0 && p->from != 0.0) {
-            join(kp, sizeof kp, pp, "from");
-            return fail(L, from, kp, DRAPE_E_INPUT,
-                        "the first piece must start at 0, not %s",
-                        from->scalar);
-        }
+        drape_yread_path(kp, sizeof kp, pp, "from");
+        if (i == 0 && p->from != 0.0)
+            return drape_yread_error(r, from, kp, DRAPE_E_INPUT,
+                                     "the first piece must start at 0, not %s",
+                                     from->scalar);
         if (i > 0) {
             const drape_fit_piece *q = &fit->p[i - 1];
-            join(kp, sizeof kp, pp, "from");
             if (p->from > q->to)
-                return fail(L, from, kp, DRAPE_E_INPUT,
-                            "gap between %s[%zu] (to %s) and %s[%zu] (from "
-                            "%s): pieces must be consecutive", path, i - 1,
-                            to_node[i - 1]->scalar, path, i, from->scalar);
+                return drape_yread_error(r, from, kp, DRAPE_E_INPUT,
+                                         "gap between %s[%zu] (to %s) and "
+                                         "%s[%zu] (from %s): pieces must be "
+                                         "consecutive", path, i - 1,
+                                         to_node[i - 1]->scalar, path, i,
+                                         from->scalar);
             if (p->from < q->to)
-                return fail(L, from, kp, DRAPE_E_INPUT,
-                            "%s[%zu] (from %s) overlaps %s[%zu] (to %s): "
-                            "pieces must be consecutive", path, i,
-                            from->scalar, path, i - 1, to_node[i - 1]->scalar);
+                return drape_yread_error(r, from, kp, DRAPE_E_INPUT,
+                                         "%s[%zu] (from %s) overlaps %s[%zu] "
+                                         "(to %s): pieces must be "
+                                         "consecutive", path, i, from->scalar,
+                                         path, i - 1, to_node[i - 1]->scalar);
         }
     }
     /* the last piece extends to infinity (MODEL.md 3.4) */
     if (to_node[fit->n - 1]) {
-        indexed(pp, sizeof pp, path, fit->n - 1, ".to");
-        warn_at(L, to_node[fit->n - 1], pp,
-                "the last piece ends at %s but is extended to infinity "
-                "(MODEL.md 3.4)", to_node[fit->n - 1]->scalar);
+        snprintf(pp, sizeof pp, "%s[%d].to", path, fit->n - 1);
+        drape_yread_warn(r, to_node[fit->n - 1], pp,
+                         "the last piece ends at %s but is extended to "
+                         "infinity (MODEL.md 3.4)",
+                         to_node[fit->n - 1]->scalar);
         fit->p[fit->n - 1].to = INFINITY;
     }
     /* M(0) = 0 (numerics.md 4.3) */
     if (fit->p[0].c[0] != 0.0) {
         const drape_ynode *c0 =
             drape_ynode_get(list->items[0], "poly", NULL)->items[0];
-        indexed(pp, sizeof pp, path, 0, ".poly[0]");
-        return fail(L, c0, pp, DRAPE_E_INPUT,
-                    "the %s at 0 must be 0, got %s %s: a fit with a "
-                    "non-zero value at 0 makes the energy a cone at the flat "
-                    "state (numerics.md 4.3)", yquantity, c0->scalar, u->yname);
+        snprintf(pp, sizeof pp, "%s[0].poly[0]", path);
+        return drape_yread_error(r, c0, pp, DRAPE_E_INPUT,
+                                 "the %s at 0 must be 0, got %s %s: a fit "
+                                 "with a non-zero value at 0 makes the energy "
+                                 "a cone at the flat state (numerics.md 4.3)",
+                                 yquantity, c0->scalar, u->yname);
     }
     /* knots: value jumps are errors, slope jumps warnings */
     double vscale = 0.0, sscale = 0.0;
@@ -398,55 +221,82 @@ static int get_fit(loader *L, const drape_ynode *list, const char *path,
         double x = fit->p[i].from;
         double yl = horner(&fit->p[i - 1], x), yr = horner(&fit->p[i], x);
         double sl = horner_d1(&fit->p[i - 1], x), sr = horner_d1(&fit->p[i], x);
-        indexed(pp, sizeof pp, path, i, "");
+        drape_yread_item_path(pp, sizeof pp, path, (size_t)i);
         if (fabs(yr - yl) > DRAPE_FABRIC_KNOT_RTOL * vscale)
-            return fail(L, list->items[i], pp, DRAPE_E_INPUT,
-                        "the %s jumps at the knot %.9g %s: %.9g %s at the "
-                        "end of %s[%d], %.9g at the start of %s[%d] (jump "
-                        "%.3g %s, %.2g%% of the largest value at a knot; "
-                        "the tolerance is %g%%)", yquantity, x, u->xname, yl,
-                        u->yname, path, i - 1, yr, path, i, yr - yl, u->yname,
-                        100 * fabs(yr - yl) / vscale,
-                        100 * DRAPE_FABRIC_KNOT_RTOL);
+            return drape_yread_error(
+                r, list->items[i], pp, DRAPE_E_INPUT,
+                "the %s jumps at the knot %.9g %s: %.9g %s at the end of "
+                "%s[%d], %.9g at the start of %s[%d] (jump %.3g %s, %.2g%% of "
+                "the largest value at a knot; the tolerance is %g%%)",
+                yquantity, x, u->xname, yl, u->yname, path, i - 1, yr, path,
+                i, yr - yl, u->yname, 100 * fabs(yr - yl) / vscale,
+                100 * DRAPE_FABRIC_KNOT_RTOL);
         if (fabs(sr - sl) > DRAPE_FABRIC_KNOT_RTOL * sscale)
-            warn_at(L, list->items[i], pp,
-                    "the slope of the %s jumps at the knot %.9g %s: %.9g "
-                    "before, %.9g after (%.2g%% of the largest slope at a "
-                    "knot); the fit is not C1 there", yquantity, x, u->xname,
-                    sl, sr,
-                    100 * fabs(sr - sl) / sscale);
+            drape_yread_warn(r, list->items[i], pp,
+                             "the slope of the %s jumps at the knot %.9g %s: "
+                             "%.9g before, %.9g after (%.2g%% of the largest "
+                             "slope at a knot); the fit is not C1 there",
+                             yquantity, x, u->xname, sl, sr,
+                             100 * fabs(sr - sl) / sscale);
     }
     drape_fit_scale(fit, u->sx, u->sy);
     drape_fit_prepare(fit);
     return 0;
 }
 
-static int get_units_block(loader *L, const drape_ynode *map, const char *path,
-                           const char *xkey, drape_dim xdim, const char *xwhat,
-                           const char *ykey, drape_dim ydim, const char *ywhat,
-                           fit_units *u)
+/* The unit under key in the units block un (key path kp): its SI scale
+ * and its name as written; unit is an example for the message when the
+ * key is missing. */
+static int get_unit(const drape_yread *r, const drape_ynode *un,
+                    const char *kp, const char *key, const char *unit,
+                    drape_dim dim, const char *noun, double *scale,
+                    char *name, size_t nname)
+{
+    char up[DRAPE_YREAD_PATH_MAX], example[64];
+    snprintf(example, sizeof example, "%s: %s", key, unit);
+    const drape_ynode *n = drape_yread_need(r, un, kp, key, example);
+    if (!n) return -1;
+    drape_yread_path(up, sizeof up, kp, key);
+    if (drape_yread_unit(r, n, up, dim, noun, scale)) return -1;
+    snprintf(name, nname, "%s", n->scalar);
+    return 0;
+}
+
+/* The units block of bending {curvature, moment} or shear {angle, force}. */
+static int get_units_block(const drape_yread *r, const drape_ynode *map,
+                           const char *path, int bending, fit_units *u)
 {
     static const char *const keys_bend[] = {"curvature", "moment", NULL};
     static const char *const keys_shear[] = {"angle", "force", NULL};
-    char kp[DRAPE_ERROR_KEY_MAX];
-    join(kp, sizeof kp, path, "units");
-    const drape_ynode *un = need(L, map, path, "units");
-    if (!un) return -1;
-    if (need_type(L, un, kp, DRAPE_YNODE_MAPPING,
-                  strcmp(xkey, "curvature") == 0
-                      ? "a mapping {curvature: 1/cm, moment: gf.cm/cm}"
-                      : "a mapping {angle: rad, force: gf/cm}"))
+    const char *block = bending ? "{curvature: 1/cm, moment: gf.cm/cm}"
+                                : "{angle: rad, force: gf/cm}";
+    char kp[DRAPE_YREAD_PATH_MAX], example[64], expected[64];
+    snprintf(example, sizeof example, "units: %s", block);
+    snprintf(expected, sizeof expected, "a mapping %s", block);
+    drape_yread_path(kp, sizeof kp, path, "units");
+    const drape_ynode *un = drape_yread_need(r, map, path, "units", example);
+    if (!un ||
+        drape_yread_want(r, un, kp, DRAPE_YNODE_MAPPING, expected) ||
+        drape_ynode_check_keys(r->doc, un, kp,
+                               bending ? keys_bend : keys_shear, r->err))
         return -1;
-    if (drape_ynode_check_keys(L->doc, un, kp,
-                               strcmp(xkey, "curvature") == 0 ? keys_bend
-                                                              : keys_shear,
-                               L->err))
+    if (bending) {
+        if (get_unit(r, un, kp, "curvature", "1/cm", DRAPE_DIM_CURVATURE,
+                     "curvature (1/m, 1/cm)", &u->sx, u->xname,
+                     sizeof u->xname) ||
+            get_unit(r, un, kp, "moment", "gf.cm/cm", DRAPE_DIM_FORCE,
+                     "moment per width (N.m/m, gf.cm/cm)", &u->sy, u->yname,
+                     sizeof u->yname))
+            return -1;
+    } else if (get_unit(r, un, kp, "angle", "rad", DRAPE_DIM_NONE,
+                        "angle (rad, deg)", &u->sx, u->xname,
+                        sizeof u->xname) ||
+               get_unit(r, un, kp, "force", "gf/cm",
+                        DRAPE_DIM_FORCE_PER_LENGTH,
+                        "force per length (N/m, gf/cm)", &u->sy, u->yname,
+                        sizeof u->yname)) {
         return -1;
-    if (get_unit(L, un, kp, xkey, xdim, xwhat, &u->sx, u->xname,
-                 sizeof u->xname) ||
-        get_unit(L, un, kp, ykey, ydim, ywhat, &u->sy, u->yname,
-                 sizeof u->yname))
-        return -1;
+    }
     return 0;
 }
 
@@ -455,20 +305,21 @@ static int get_units_block(loader *L, const drape_ynode *map, const char *path,
  * twist rigidity B_bias - (B_warp + B_weft) / 4 is not negative), and the
  * twist energy it implies should be convex: checked on a grid of twist
  * curvatures up to twice the last knot (or 100 1/m). */
-static int check_bias(loader *L, const drape_ynode *b, const drape_fabric *f)
+static int check_bias(const drape_yread *r, const drape_ynode *b,
+                      const drape_fabric *f)
 {
     double Bb = drape_fit_slope(&f->bend_bias, 0.0);
     double Bs = 0.25 * (drape_fit_slope(&f->bend[DRAPE_WARP], 0.0) +
                         drape_fit_slope(&f->bend[DRAPE_WEFT], 0.0));
-    if (!(Bb >= Bs)) {
-        fail(L, b, "bending.bias", DRAPE_E_INPUT,
-             "the bias rigidity %g N.m is below (B_warp + B_weft) / 4 = %g N.m, what "
-             "the warp and weft hinges alone give a strip cut at 45 degrees: the "
-             "twist rigidity would be negative", Bb, Bs);
-        return -1;
-    }
+    if (!(Bb >= Bs))
+        return drape_yread_error(
+            r, b, "bending.bias", DRAPE_E_INPUT,
+            "the bias rigidity %g N.m is below (B_warp + B_weft) / 4 = %g N.m, "
+            "what the warp and weft hinges alone give a strip cut at 45 "
+            "degrees: the twist rigidity would be negative", Bb, Bs);
     double tmax = 100.0;
-    const drape_fit *fs[3] = {&f->bend_bias, &f->bend[DRAPE_WARP], &f->bend[DRAPE_WEFT]};
+    const drape_fit *fs[3] = {&f->bend_bias, &f->bend[DRAPE_WARP],
+                              &f->bend[DRAPE_WEFT]};
     for (int k = 0; k < 3; k++) {
         const drape_fit *fk = fs[k];
         double last = fk->n > 1 ? fk->p[fk->n - 1].from : 0.0;
@@ -481,78 +332,82 @@ static int check_bias(loader *L, const drape_ynode *b, const drape_fabric *f)
         if (d2 < worst) { worst = d2; at = t; }
     }
     if (worst < -1e-9 * scale)
-        warn_at(L, b, "bending.bias",
-                      "the twist energy implied by the bias, warp and weft curves is not "
-                      "convex: its stiffness Wt'' = 4 M_bias'(2 tau) - M_warp'(tau) - "
-                      "M_weft'(tau) reaches %.3g N.m at tau = %.3g 1/m (negative: the "
-                      "bias curve softens faster than the warp and weft curves)",
-                      worst, at);
+        drape_yread_warn(
+            r, b, "bending.bias",
+            "the twist energy implied by the bias, warp and weft curves is not "
+            "convex: its stiffness Wt'' = 4 M_bias'(2 tau) - M_warp'(tau) - "
+            "M_weft'(tau) reaches %.3g N.m at tau = %.3g 1/m (negative: the "
+            "bias curve softens faster than the warp and weft curves)",
+            worst, at);
     return 0;
 }
 
-static int get_bending(loader *L, const drape_ynode *bn, drape_fabric *f)
+/* A fit list for the example in "missing required key" messages. */
+#define FIT_EXAMPLE "[{from: 0, poly: [0, 1]}]"
+
+static int get_bending(const drape_yread *r, const drape_ynode *bn,
+                       drape_fabric *f)
 {
     static const char *const keys[] = {"units", "warp", "weft", "bias", NULL};
     fit_units u;
-    if (need_type(L, bn, "bending", DRAPE_YNODE_MAPPING,
-                  "a mapping {units, warp, weft[, bias]}"))
+    if (drape_yread_want(r, bn, "bending", DRAPE_YNODE_MAPPING,
+                         "a mapping {units, warp, weft[, bias]}") ||
+        drape_ynode_check_keys(r->doc, bn, "bending", keys, r->err) ||
+        get_units_block(r, bn, "bending", 1, &u))
         return -1;
-    if (drape_ynode_check_keys(L->doc, bn, "bending", keys, L->err)) return -1;
-    if (get_units_block(L, bn, "bending", "curvature", DRAPE_DIM_CURVATURE,
-                        "curvature (1/m, 1/cm)", "moment", DRAPE_DIM_FORCE,
-                        "moment per width (N.m/m, gf.cm/cm)", &u))
-        return -1;
-    const drape_ynode *w = need(L, bn, "bending", "warp");
-    if (!w || get_fit(L, w, "bending.warp", &u, "bending moment",
+    const drape_ynode *w =
+        drape_yread_need(r, bn, "bending", "warp", "warp: " FIT_EXAMPLE);
+    if (!w || get_fit(r, w, "bending.warp", &u, "bending moment",
                       &f->bend[DRAPE_WARP]))
         return -1;
-    const drape_ynode *t = need(L, bn, "bending", "weft");
-    if (!t || get_fit(L, t, "bending.weft", &u, "bending moment",
+    const drape_ynode *t =
+        drape_yread_need(r, bn, "bending", "weft", "weft: " FIT_EXAMPLE);
+    if (!t || get_fit(r, t, "bending.weft", &u, "bending moment",
                       &f->bend[DRAPE_WEFT]))
         return -1;
     const drape_ynode *b = drape_ynode_get(bn, "bias", NULL);
     if (b) {
-        if (get_fit(L, b, "bending.bias", &u, "bending moment", &f->bend_bias))
+        if (get_fit(r, b, "bending.bias", &u, "bending moment", &f->bend_bias))
             return -1;
         f->has_bias = 1;
-        return check_bias(L, b, f);
+        return check_bias(r, b, f);
     }
     return 0;
 }
 
-static int get_shear(loader *L, const drape_ynode *sn, drape_fabric *f)
+static int get_shear(const drape_yread *r, const drape_ynode *sn,
+                     drape_fabric *f)
 {
     static const char *const keys[] = {"units", "warp", "weft", "curve", NULL};
     fit_units u;
-    if (need_type(L, sn, "shear", DRAPE_YNODE_MAPPING,
-                  "a mapping {units, warp, weft} or {units, curve}"))
+    if (drape_yread_want(r, sn, "shear", DRAPE_YNODE_MAPPING,
+                         "a mapping {units, warp, weft} or {units, curve}") ||
+        drape_ynode_check_keys(r->doc, sn, "shear", keys, r->err) ||
+        get_units_block(r, sn, "shear", 0, &u))
         return -1;
-    if (drape_ynode_check_keys(L->doc, sn, "shear", keys, L->err)) return -1;
-    if (get_units_block(L, sn, "shear", "angle", DRAPE_DIM_NONE,
-                        "angle (rad, deg)", "force", DRAPE_DIM_FORCE_PER_LENGTH,
-                        "force per length (N/m, gf/cm)", &u))
-        return -1;
-    size_t ci;
-    const drape_ynode *curve = drape_ynode_get(sn, "curve", &ci);
+    const drape_ynode *curve = drape_ynode_get(sn, "curve", NULL);
     if (curve) {
         const drape_ynode *other = drape_ynode_get(sn, "warp", NULL);
         if (!other) other = drape_ynode_get(sn, "weft", NULL);
         if (other)
-            return fail(L, other, "shear", DRAPE_E_INPUT,
-                        "give either `curve` (one curve for both directions) "
-                        "or `warp` and `weft`, not both");
-        if (get_fit(L, curve, "shear.curve", &u, "shear force",
+            return drape_yread_error(r, other, "shear", DRAPE_E_INPUT,
+                                     "give either `curve` (one curve for both "
+                                     "directions) or `warp` and `weft`, not "
+                                     "both");
+        if (get_fit(r, curve, "shear.curve", &u, "shear force",
                     &f->shear[DRAPE_WARP]))
             return -1;
         f->shear[DRAPE_WEFT] = f->shear[DRAPE_WARP];
         return 0;
     }
-    const drape_ynode *w = need(L, sn, "shear", "warp");
-    if (!w || get_fit(L, w, "shear.warp", &u, "shear force",
+    const drape_ynode *w =
+        drape_yread_need(r, sn, "shear", "warp", "warp: " FIT_EXAMPLE);
+    if (!w || get_fit(r, w, "shear.warp", &u, "shear force",
                       &f->shear[DRAPE_WARP]))
         return -1;
-    const drape_ynode *t = need(L, sn, "shear", "weft");
-    if (!t || get_fit(L, t, "shear.weft", &u, "shear force",
+    const drape_ynode *t =
+        drape_yread_need(r, sn, "shear", "weft", "weft: " FIT_EXAMPLE);
+    if (!t || get_fit(r, t, "shear.weft", &u, "shear force",
                       &f->shear[DRAPE_WEFT]))
         return -1;
     return 0;
@@ -635,60 +490,66 @@ static int has_letter(const char *s)
     return 0;
 }
 
-static int get_kes(loader *L, const drape_ynode *kn, drape_fabric *f)
+static int get_kes(const drape_yread *r, const drape_ynode *kn,
+                   drape_fabric *f)
 {
     static const char *const keys[] = {"warp", "weft", NULL};
     static const char *const dkeys[] = {"B", "2HB", "G", "2HG", "2HG5", NULL};
     static const char *const dname[2] = {"weft", "warp"};
-    char pp[DRAPE_ERROR_KEY_MAX], kp[DRAPE_ERROR_KEY_MAX];
-    if (need_type(L, kn, "kes", DRAPE_YNODE_MAPPING,
-                  "a mapping {warp: {B, 2HB, G, 2HG}, weft: {...}}"))
+    static const char *const example[2] = {
+        "weft: {B: 0.085 gf.cm^2/cm, G: 0.9 gf/cm/deg}",
+        "warp: {B: 0.085 gf.cm^2/cm, G: 0.9 gf/cm/deg}"};
+    const int pos = DRAPE_YREAD_POSITIVE, nonneg = DRAPE_YREAD_NONNEGATIVE;
+    const drape_dim fpl = DRAPE_DIM_FORCE_PER_LENGTH;
+    char pp[DRAPE_YREAD_PATH_MAX], kp[DRAPE_YREAD_PATH_MAX];
+    if (drape_yread_want(r, kn, "kes", DRAPE_YNODE_MAPPING,
+                         "a mapping {warp: {B, 2HB, G, 2HG}, weft: {...}}") ||
+        drape_ynode_check_keys(r->doc, kn, "kes", keys, r->err))
         return -1;
-    if (drape_ynode_check_keys(L->doc, kn, "kes", keys, L->err)) return -1;
     for (int d = DRAPE_WARP; d >= DRAPE_WEFT; d--) {
         double B, hb2 = 0.0, G, hg2 = -1.0, hg52 = -1.0;
-        const drape_ynode *dn = need(L, kn, "kes", dname[d]), *v;
+        const drape_ynode *g, *v;
+        const drape_ynode *dn =
+            drape_yread_need(r, kn, "kes", dname[d], example[d]);
         if (!dn) return -1;
-        join(pp, sizeof pp, "kes", dname[d]);
-        if (need_type(L, dn, pp, DRAPE_YNODE_MAPPING,
-                      "a mapping {B, 2HB, G, 2HG, 2HG5}"))
+        drape_yread_path(pp, sizeof pp, "kes", dname[d]);
+        if (drape_yread_want(r, dn, pp, DRAPE_YNODE_MAPPING,
+                             "a mapping {B, 2HB, G, 2HG, 2HG5}") ||
+            drape_ynode_check_keys(r->doc, dn, pp, dkeys, r->err))
             return -1;
-        if (drape_ynode_check_keys(L->doc, dn, pp, dkeys, L->err)) return -1;
         /* B: gf.cm^2/cm = moment per width per curvature = N.m */
-        if (!(v = need(L, dn, pp, "B"))) return -1;
-        join(kp, sizeof kp, pp, "B");
-        if (get_quantity(L, v, kp, DRAPE_DIM_MOMENT, 1, &B)) return -1;
-        if ((v = drape_ynode_get(dn, "2HB", NULL))) {
-            join(kp, sizeof kp, pp, "2HB");
-            if (get_quantity(L, v, kp, DRAPE_DIM_FORCE, 0, &hb2)) return -1;
-        }
-        if (!(v = need(L, dn, pp, "G"))) return -1;
-        join(kp, sizeof kp, pp, "G");
-        if (get_quantity(L, v, kp, DRAPE_DIM_FORCE_PER_LENGTH, 1, &G))
+        if (drape_yread_req_quantity(r, dn, pp, "B", DRAPE_DIM_MOMENT,
+                                     "bending rigidity", pos,
+                                     "B: 0.085 gf.cm^2/cm", &B, NULL) ||
+            drape_yread_opt_quantity(r, dn, pp, "2HB", DRAPE_DIM_FORCE,
+                                     "bending hysteresis", nonneg, &hb2,
+                                     NULL) ||
+            drape_yread_req_quantity(r, dn, pp, "G", fpl, "shear rigidity", pos,
+                                     "G: 0.9 gf/cm/deg", &G, &g))
             return -1;
-        if (!has_angle_unit(v->scalar) && has_letter(v->scalar))
-            return fail(L, v, kp, DRAPE_E_INPUT,
-                        "G is a force per length per angle: write the angle "
-                        "unit, e.g. \"0.9 gf/cm/deg\" (KES) or "
-                        "\"... N/m/rad\", got \"%s\"", v->scalar);
-        if ((v = drape_ynode_get(dn, "2HG", NULL))) {
-            join(kp, sizeof kp, pp, "2HG");
-            if (get_quantity(L, v, kp, DRAPE_DIM_FORCE_PER_LENGTH, 0, &hg2))
-                return -1;
-        }
-        if ((v = drape_ynode_get(dn, "2HG5", NULL))) {
-            join(kp, sizeof kp, pp, "2HG5");
-            if (get_quantity(L, v, kp, DRAPE_DIM_FORCE_PER_LENGTH, 0, &hg52))
-                return -1;
+        drape_yread_path(kp, sizeof kp, pp, "G");
+        if (!has_angle_unit(g->scalar) && has_letter(g->scalar))
+            return drape_yread_error(r, g, kp, DRAPE_E_INPUT,
+                                     "G is a force per length per angle: "
+                                     "write the angle unit, e.g. \"0.9 "
+                                     "gf/cm/deg\" (KES) or \"... N/m/rad\", "
+                                     "got \"%s\"", g->scalar);
+        if (drape_yread_opt_quantity(r, dn, pp, "2HG", fpl, "shear hysteresis",
+                                     nonneg, &hg2, NULL) ||
+            drape_yread_opt_quantity(r, dn, pp, "2HG5", fpl,
+                                     "shear hysteresis", nonneg, &hg52, &v))
+            return -1;
+        if (v) {
+            drape_yread_path(kp, sizeof kp, pp, "2HG5");
             if (hg2 <= 0)
-                return fail(L, v, kp, DRAPE_E_INPUT,
-                            "2HG5 needs a positive 2HG (the hysteresis at "
-                            "0.5 deg) as well");
+                return drape_yread_error(r, v, kp, DRAPE_E_INPUT,
+                                         "2HG5 needs a positive 2HG (the "
+                                         "hysteresis at 0.5 deg) as well");
             if (hg52 < hg2)
-                return fail(L, v, kp, DRAPE_E_INPUT,
-                            "2HG5 (hysteresis at 5 deg) is smaller than 2HG "
-                            "(at 0.5 deg); the construction needs 2HG5 >= "
-                            "2HG");
+                return drape_yread_error(r, v, kp, DRAPE_E_INPUT,
+                                         "2HG5 (hysteresis at 5 deg) is "
+                                         "smaller than 2HG (at 0.5 deg); the "
+                                         "construction needs 2HG5 >= 2HG");
         }
         kes_bending(B, hb2, &f->bend[d]);
         kes_shear(G, hg2, hg52, &f->shear[d]);
@@ -699,50 +560,59 @@ static int get_kes(loader *L, const drape_ynode *kn, drape_fabric *f)
 
 /* ------------------------------------------------------------ stiffness */
 
-static int get_stiffness(loader *L, const drape_ynode *root, drape_fabric *f)
+/* A tensile stiffness (force per length, > 0). */
+static int get_k(const drape_yread *r, const drape_ynode *n, const char *path,
+                 double *out)
+{
+    return drape_yread_quantity(r, n, path, DRAPE_DIM_FORCE_PER_LENGTH,
+                                "tensile stiffness", DRAPE_YREAD_POSITIVE, out);
+}
+
+static int get_stiffness(const drape_yread *r, const drape_ynode *root,
+                         drape_fabric *f)
 {
     static const char *const keys[] = {"warp", "weft", NULL};
     const drape_ynode *ts = drape_ynode_get(root, "tensile_stiffness", NULL);
     const drape_ynode *kw = drape_ynode_get(root, "k_warp", NULL);
     const drape_ynode *kf = drape_ynode_get(root, "k_weft", NULL);
     if (ts && (kw || kf))
-        return fail(L, kw ? kw : kf, kw ? "k_warp" : "k_weft", DRAPE_E_INPUT,
-                    "give either `tensile_stiffness` or `k_warp` and "
-                    "`k_weft`, not both");
+        return drape_yread_error(r, kw ? kw : kf, kw ? "k_warp" : "k_weft",
+                                 DRAPE_E_INPUT,
+                                 "give either `tensile_stiffness` or `k_warp` "
+                                 "and `k_weft`, not both");
     if (kw || kf) {
-        if (!kw) return fail(L, root, "k_warp", DRAPE_E_INPUT,
-                             "missing key `k_warp` (`k_weft` is given)");
-        if (!kf) return fail(L, root, "k_weft", DRAPE_E_INPUT,
-                             "missing key `k_weft` (`k_warp` is given)");
-        if (get_quantity(L, kw, "k_warp", DRAPE_DIM_FORCE_PER_LENGTH, 1,
-                         &f->k[DRAPE_WARP]) ||
-            get_quantity(L, kf, "k_weft", DRAPE_DIM_FORCE_PER_LENGTH, 1,
-                         &f->k[DRAPE_WEFT]))
+        if (!kw)
+            return drape_yread_error(r, root, "k_warp", DRAPE_E_INPUT,
+                                     "missing key `k_warp` (`k_weft` is "
+                                     "given)");
+        if (!kf)
+            return drape_yread_error(r, root, "k_weft", DRAPE_E_INPUT,
+                                     "missing key `k_weft` (`k_warp` is "
+                                     "given)");
+        if (get_k(r, kw, "k_warp", &f->k[DRAPE_WARP]) ||
+            get_k(r, kf, "k_weft", &f->k[DRAPE_WEFT]))
             return -1;
         return 0;
     }
     if (!ts)
-        return fail(L, root, "tensile_stiffness", DRAPE_E_INPUT,
-                    "missing key `tensile_stiffness` (or `k_warp` and "
-                    "`k_weft`)");
+        return drape_yread_error(r, root, "tensile_stiffness", DRAPE_E_INPUT,
+                                 "missing key `tensile_stiffness` (or `k_warp` "
+                                 "and `k_weft`)");
     if (ts->type == DRAPE_YNODE_MAPPING) {
         const drape_ynode *w, *t;
-        if (drape_ynode_check_keys(L->doc, ts, "tensile_stiffness", keys,
-                                   L->err))
+        if (drape_ynode_check_keys(r->doc, ts, "tensile_stiffness", keys,
+                                   r->err) ||
+            !(w = drape_yread_need(r, ts, "tensile_stiffness", "warp",
+                                   "warp: 10000 N/m")) ||
+            !(t = drape_yread_need(r, ts, "tensile_stiffness", "weft",
+                                   "weft: 10000 N/m")))
             return -1;
-        if (!(w = need(L, ts, "tensile_stiffness", "warp")) ||
-            !(t = need(L, ts, "tensile_stiffness", "weft")))
-            return -1;
-        if (get_quantity(L, w, "tensile_stiffness.warp",
-                         DRAPE_DIM_FORCE_PER_LENGTH, 1, &f->k[DRAPE_WARP]) ||
-            get_quantity(L, t, "tensile_stiffness.weft",
-                         DRAPE_DIM_FORCE_PER_LENGTH, 1, &f->k[DRAPE_WEFT]))
+        if (get_k(r, w, "tensile_stiffness.warp", &f->k[DRAPE_WARP]) ||
+            get_k(r, t, "tensile_stiffness.weft", &f->k[DRAPE_WEFT]))
             return -1;
         return 0;
     }
-    if (get_quantity(L, ts, "tensile_stiffness", DRAPE_DIM_FORCE_PER_LENGTH, 1,
-                     &f->k[DRAPE_WARP]))
-        return -1;
+    if (get_k(r, ts, "tensile_stiffness", &f->k[DRAPE_WARP])) return -1;
     f->k[DRAPE_WEFT] = f->k[DRAPE_WARP];
     return 0;
 }
@@ -755,7 +625,7 @@ int drape_fabric_load(const char *path, drape_fabric *out, drape_error *err,
     static const char *const keys[] = {
         "fabric", "description", "source", "weight", "tensile_stiffness",
         "k_warp", "k_weft", "bending", "shear", "kes", NULL};
-    loader L = {NULL, err, warn, warn_ctx};
+    drape_yread r = {NULL, err, 0u, warn, warn_ctx};
     drape_fabric *f = NULL;
     drape_ydoc *doc = NULL;
     const drape_ynode *root, *n;
@@ -763,7 +633,7 @@ int drape_fabric_load(const char *path, drape_fabric *out, drape_error *err,
 
     doc = drape_ydoc_load(path, err);
     if (!doc) goto out;
-    L.doc = doc;
+    r.doc = doc;
     root = doc->root;
     f = drape_calloc(1, sizeof *f);
     if (!f) {
@@ -774,50 +644,58 @@ int drape_fabric_load(const char *path, drape_fabric *out, drape_error *err,
     snprintf(f->path, sizeof f->path, "%s", path);
     if (drape_ynode_check_keys(doc, root, "", keys, err)) goto out;
 
-    if (!(n = need(&L, root, "", "fabric")) ||
-        get_text(&L, n, "fabric", f->name, sizeof f->name, 1))
+    if (!(n = drape_yread_need(&r, root, "", "fabric",
+                               "fabric: cotton-breen")) ||
+        drape_yread_text(&r, n, "fabric", 1, f->name, sizeof f->name))
         goto out;
     if ((n = drape_ynode_get(root, "description", NULL)) &&
-        get_text(&L, n, "description", f->description, sizeof f->description,
-                 0))
+        drape_yread_text(&r, n, "description", 0, f->description,
+                         sizeof f->description))
         goto out;
     if ((n = drape_ynode_get(root, "source", NULL)) &&
-        get_text(&L, n, "source", f->source, sizeof f->source, 0))
+        drape_yread_text(&r, n, "source", 0, f->source, sizeof f->source))
         goto out;
-    if (!(n = need(&L, root, "", "weight")) ||
-        get_quantity(&L, n, "weight", DRAPE_DIM_AREAL_DENSITY, 1, &f->weight))
+    if (drape_yread_req_quantity(&r, root, "", "weight",
+                                 DRAPE_DIM_AREAL_DENSITY, "areal density",
+                                 DRAPE_YREAD_POSITIVE, "weight: 200 g/m^2",
+                                 &f->weight, NULL) ||
+        get_stiffness(&r, root, f))
         goto out;
-    if (get_stiffness(&L, root, f)) goto out;
 
     const drape_ynode *kes = drape_ynode_get(root, "kes", NULL);
     const drape_ynode *bend = drape_ynode_get(root, "bending", NULL);
     const drape_ynode *shear = drape_ynode_get(root, "shear", NULL);
     if (kes) {
         if (bend || shear) {
-            fail(&L, bend ? bend : shear, bend ? "bending" : "shear",
-                 DRAPE_E_INPUT, "give either `kes` or `bending` and `shear`, "
-                 "not both");
+            drape_yread_error(&r, bend ? bend : shear,
+                              bend ? "bending" : "shear", DRAPE_E_INPUT,
+                              "give either `kes` or `bending` and `shear`, "
+                              "not both");
             goto out;
         }
-        if (get_kes(&L, kes, f)) goto out;
+        if (get_kes(&r, kes, f)) goto out;
     } else {
         if (!bend) {
-            fail(&L, root, "bending", DRAPE_E_INPUT,
-                 "missing key `bending` (or give KES-F values under `kes`)");
+            drape_yread_error(&r, root, "bending", DRAPE_E_INPUT,
+                              "missing key `bending` (or give KES-F values "
+                              "under `kes`)");
             goto out;
         }
         if (!shear) {
-            fail(&L, root, "shear", DRAPE_E_INPUT,
-                 "missing key `shear` (or give KES-F values under `kes`)");
+            drape_yread_error(&r, root, "shear", DRAPE_E_INPUT,
+                              "missing key `shear` (or give KES-F values "
+                              "under `kes`)");
             goto out;
         }
-        if (get_bending(&L, bend, f) || get_shear(&L, shear, f)) goto out;
+        if (get_bending(&r, bend, f) || get_shear(&r, shear, f)) goto out;
     }
     if (drape_fit_mean(&f->shear[DRAPE_WEFT], &f->shear[DRAPE_WARP],
                        &f->shear_mean)) {
-        fail(&L, kes ? kes : shear, kes ? "kes" : "shear", DRAPE_E_INPUT,
-             "the warp and weft shear fits have more than %d distinct knots "
-             "together; their mean cannot be formed", DRAPE_FIT_MAX_PIECES);
+        drape_yread_error(&r, kes ? kes : shear, kes ? "kes" : "shear",
+                          DRAPE_E_INPUT,
+                          "the warp and weft shear fits have more than %d "
+                          "distinct knots together; their mean cannot be "
+                          "formed", DRAPE_FIT_MAX_PIECES);
         goto out;
     }
     *out = *f;

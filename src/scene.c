@@ -106,7 +106,7 @@ static int parse_fabric(const drape_yread *c, const drape_ynode *root, drape_sce
     drape_ynode_get(root, "fabric", &idx);
     if (drape_yread_want_scalar(c, v, "fabric", "a file name")) return -1;
     if (v->scalar[0] == 0)
-        return drape_ynode_error(c->err, c->doc, v, "fabric", DRAPE_E_INPUT,
+        return drape_yread_error(c, v, "fabric", DRAPE_E_INPUT,
                                  "expected a file name, got an empty value");
     const char *dir = c->doc->dir ? c->doc->dir : ".";
     int r;
@@ -117,7 +117,7 @@ static int parse_fabric(const drape_yread *c, const drape_ynode *root, drape_sce
         r = snprintf(s->fabric_path, sizeof s->fabric_path, "%s%s%s", dir,
                      dir[nd - 1] == '/' ? "" : "/", v->scalar);
     if (r < 0 || (size_t)r >= sizeof s->fabric_path)
-        return drape_ynode_error(c->err, c->doc, v, "fabric", DRAPE_E_INPUT,
+        return drape_yread_error(c, v, "fabric", DRAPE_E_INPUT,
                                  "fabric path too long (more than %d bytes)",
                                  DRAPE_ERROR_FILE_MAX - 1);
     struct stat st;
@@ -163,14 +163,14 @@ static int parse_direction(const drape_yread *c, const drape_ynode *v, drape_sce
             double rad;
             char why[160];
             if (drape_units_parse(v->scalar, DRAPE_DIM_NONE, &rad, why, sizeof why) != 0)
-                return drape_ynode_error(c->err, c->doc, v, path, DRAPE_E_INPUT,
+                return drape_yread_error(c, v, path, DRAPE_E_INPUT,
                                          "expected warp, weft, bias or an angle from the warp "
                                          "(22.5, 22.5 deg), got \"%s\"", v->scalar);
             deg = rad * 180.0 / 3.14159265358979323846;
         }
     }
     if (!(deg >= 0.0 && deg <= 90.0))
-        return drape_ynode_error(c->err, c->doc, v, path, DRAPE_E_INPUT,
+        return drape_yread_error(c, v, path, DRAPE_E_INPUT,
                                  "the strip's angle from the warp must be in [0, 90] degrees "
                                  "(the fabric is symmetric about its yarns), got \"%s\"",
                                  v->scalar);
@@ -338,7 +338,7 @@ static int parse_perturbation(const drape_yread *c, const drape_ynode *root, dra
         if (!ok) {
             if (drape_yread_want_scalar(c, v, "perturbation.seed", "a non-negative integer"))
                 return -1;
-            return drape_ynode_error(c->err, c->doc, v, "perturbation.seed",
+            return drape_yread_error(c, v, "perturbation.seed",
                                      DRAPE_E_INPUT,
                                      "expected a non-negative integer%s, got "
                                      "\"%s\"", big ? " (this one is too "
@@ -358,22 +358,22 @@ static int parse_pins(const drape_yread *c, const drape_ynode *root, drape_scene
     s->at_pins.line = root->key_line[idx];
     s->at_pins.column = root->key_column[idx];
     if (m->type != DRAPE_YNODE_SEQUENCE)
-        return drape_ynode_error(c->err, c->doc, m, "pins", DRAPE_E_INPUT,
+        return drape_yread_error(c, m, "pins", DRAPE_E_INPUT,
                                  "expected a sequence of [i, j] pairs, got %s",
                                  drape_yread_kind(m));
     if (m->n == 0)
-        return drape_ynode_error(c->err, c->doc, m, "pins", DRAPE_E_INPUT,
+        return drape_yread_error(c, m, "pins", DRAPE_E_INPUT,
                                  "expected at least one [i, j] pair, got an "
                                  "empty sequence");
     if (m->n > DRAPE_SCENE_MAX_PINS)
-        return drape_ynode_error(c->err, c->doc, m, "pins", DRAPE_E_INPUT,
+        return drape_yread_error(c, m, "pins", DRAPE_E_INPUT,
                                  "expected at most %d pins, got %zu",
                                  DRAPE_SCENE_MAX_PINS, m->n);
     for (size_t k = 0; k < m->n; k++) {
         const drape_ynode *p = m->items[k];
         snprintf(path, sizeof path, "pins[%zu]", k);
         if (p->type != DRAPE_YNODE_SEQUENCE || p->n != 2)
-            return drape_ynode_error(c->err, c->doc, p, path, DRAPE_E_INPUT,
+            return drape_yread_error(c, p, path, DRAPE_E_INPUT,
                                      "expected an [i, j] pair of lattice indices, got %s%s",
                                      p->type == DRAPE_YNODE_SEQUENCE ? "a sequence of length "
                                                                      : drape_yread_kind(p),
@@ -414,7 +414,7 @@ static int parse_model(const drape_yread *c, const drape_ynode *root, drape_scen
         char list[128];
         drape_yread_name_list(drape_term_names, list, sizeof list);
         if (v->type != DRAPE_YNODE_SEQUENCE || v->n == 0)
-            return drape_ynode_error(c->err, c->doc, v, "model.terms", DRAPE_E_INPUT,
+            return drape_yread_error(c, v, "model.terms", DRAPE_E_INPUT,
                                      "expected a non-empty sequence of terms (%s), got %s", list,
                                      v->type == DRAPE_YNODE_SEQUENCE ? "an empty sequence"
                                                                      : drape_yread_kind(v));
@@ -425,7 +425,7 @@ static int parse_model(const drape_yread *c, const drape_ynode *root, drape_scen
             snprintf(path, sizeof path, "model.terms[%zu]", k);
             if (drape_yread_enum(c, v->items[k], path, drape_term_names, &t)) return -1;
             if (s->terms & (1u << t))
-                return drape_ynode_error(c->err, c->doc, v->items[k], path,
+                return drape_yread_error(c, v->items[k], path,
                                          DRAPE_E_INPUT,
                                          "term `%s` is listed twice",
                                          drape_term_names[t]);
@@ -462,7 +462,7 @@ static int parse_tol(const drape_yread *c, const drape_ynode *m, const char *key
     if (drape_yread_quantity(c, v, path, DRAPE_DIM_NONE, "number in (0, 1)", DRAPE_YREAD_ANY, &t))
         return -1;
     if (!(t > 0.0 && t < 1.0))
-        return drape_ynode_error(c->err, c->doc, v, path, DRAPE_E_INPUT,
+        return drape_yread_error(c, v, path, DRAPE_E_INPUT,
                                  "expected a number in (0, 1), got \"%s\"",
                                  v->scalar);
     *out = t;
@@ -518,7 +518,7 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
                                  &s->fall_swing))
             return -1;
         if (!(s->fall_swing < 1.0))
-            return drape_ynode_error(c->err, c->doc, v, "solver.fall_swing", DRAPE_E_INPUT,
+            return drape_yread_error(c, v, "solver.fall_swing", DRAPE_E_INPUT,
                                      "expected a fraction in [0, 1), got \"%s\"", v->scalar);
     }
     if ((v = drape_ynode_get(m, "substeps", NULL)) != NULL) {
@@ -565,7 +565,7 @@ static int parse_end(const drape_yread *c, const drape_ynode *root, drape_scene 
         char a[32], b[32];
         snprintf(a, sizeof a, "%g s", s->eq_window);
         snprintf(b, sizeof b, "%g s", s->t_max);
-        return drape_ynode_error(c->err, c->doc, win ? win : eq,
+        return drape_yread_error(c, win ? win : eq,
                                  "end.equilibrium.window", DRAPE_E_INPUT,
                                  "expected a window shorter than t_max (%s), "
                                  "got %s", b, a);
@@ -692,8 +692,6 @@ int drape_scene_load_flags(const char *path, unsigned flags, drape_scene *s,
 {
     drape_ydoc *doc = NULL;
     int rc = -1;
-    (void)warn;
-    (void)warn_ctx;
 
     if (!path || !s)
         return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
@@ -706,7 +704,7 @@ int drape_scene_load_flags(const char *path, unsigned flags, drape_scene *s,
     snprintf(s->path, sizeof s->path, "%s", path);
     doc = drape_ydoc_load(path, err);
     if (!doc) goto out;
-    drape_yread c = {doc, err, flags};
+    drape_yread c = {doc, err, flags, warn, warn_ctx};
     if (parse_scene(&c, s) != 0) goto out;
     if (drape_scene_check_geometry(s, err) != 0) goto out;
     rc = 0;

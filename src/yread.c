@@ -2,6 +2,7 @@
  * errors (yread.h). */
 #include "yread.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -27,16 +28,52 @@ void drape_yread_path(char *out, size_t n, const char *parent, const char *key)
         snprintf(out, n, "%s", key);
 }
 
+void drape_yread_item_path(char *out, size_t n, const char *parent, size_t idx)
+{
+    snprintf(out, n, "%s[%zu]", parent, idx);
+}
+
+/* The message of fmt and ap as an error (or, with kind DRAPE_OK, a
+ * warning) at line:column of r's file, into *e. */
+static void set_at(const drape_yread *r, drape_error *e, drape_error_kind kind, int line,
+                   int column, const char *path, const char *fmt, va_list ap)
+{
+    char msg[DRAPE_ERROR_MSG_MAX];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    drape_error_set(e, kind, r->doc->path, line, column, path, "%s", msg);
+}
+
+int drape_yread_error(const drape_yread *r, const drape_ynode *n, const char *path,
+                      drape_error_kind kind, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    set_at(r, r->err, kind, n ? n->line : 0, n ? n->column : 0, path, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
 int drape_yread_key_error(const drape_yread *r, const drape_ynode *map, size_t idx,
                           const char *path, drape_error_kind kind, const char *fmt, ...)
 {
-    char msg[DRAPE_ERROR_MSG_MAX];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    set_at(r, r->err, kind, map->key_line[idx], map->key_column[idx], path, fmt, ap);
     va_end(ap);
-    return drape_error_set(r->err, kind, r->doc->path, map->key_line[idx], map->key_column[idx],
-                           path, "%s", msg);
+    return -1;
+}
+
+void drape_yread_warn(const drape_yread *r, const drape_ynode *n, const char *path,
+                      const char *fmt, ...)
+{
+    drape_error w;
+    va_list ap;
+    if (!r->warn) return;
+    drape_error_clear(&w);
+    va_start(ap, fmt);
+    set_at(r, &w, DRAPE_OK, n ? n->line : 0, n ? n->column : 0, path, fmt, ap);
+    va_end(ap);
+    r->warn(r->warn_ctx, &w);
 }
 
 int drape_yread_is_in(const char *s, const char *const *list)
@@ -59,11 +96,23 @@ const char *drape_yread_name_list(const char *const *names, char *buf, size_t n)
     return buf;
 }
 
+int drape_yread_want(const drape_yread *r, const drape_ynode *n, const char *path,
+                     drape_ynode_type type, const char *expected)
+{
+    if (n->type == type) return 0;
+    if (n->type == DRAPE_YNODE_SCALAR && !n->scalar[0])
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got an empty value",
+                                 expected);
+    if (n->type == DRAPE_YNODE_SCALAR)
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got a scalar (\"%s\")",
+                                 expected, n->scalar);
+    return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got %s", expected,
+                             drape_yread_kind(n));
+}
+
 int drape_yread_want_map(const drape_yread *r, const drape_ynode *n, const char *path)
 {
-    if (n->type == DRAPE_YNODE_MAPPING) return 0;
-    return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT,
-                             "expected a mapping ({key: value, ...}), got %s", drape_yread_kind(n));
+    return drape_yread_want(r, n, path, DRAPE_YNODE_MAPPING, "a mapping ({key: value, ...})");
 }
 
 /* Required key: its value, or an error at the mapping that lacks it. */
@@ -74,7 +123,7 @@ const drape_ynode *drape_yread_need(const drape_yread *r, const drape_ynode *map
     if (!v) {
         char path[DRAPE_YREAD_PATH_MAX];
         drape_yread_path(path, sizeof path, parent, key);
-        drape_ynode_error(r->err, r->doc, map, path, DRAPE_E_INPUT,
+        drape_yread_error(r, map, path, DRAPE_E_INPUT,
                           "missing required key `%s` (for example `%s`)", key, example);
     }
     return v;
@@ -86,9 +135,24 @@ const drape_ynode *drape_yread_need(const drape_yread *r, const drape_ynode *map
 int drape_yread_want_scalar(const drape_yread *r, const drape_ynode *n, const char *path,
                             const char *expected)
 {
-    if (n->type == DRAPE_YNODE_SCALAR) return 0;
-    return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT, "expected %s, got %s",
-                             expected, drape_yread_kind(n));
+    return drape_yread_want(r, n, path, DRAPE_YNODE_SCALAR, expected);
+}
+
+/* "a positive length" (sign DRAPE_YREAD_*) into buf; returns buf. */
+static const char *signed_noun(char *buf, size_t n, int sign, const char *noun)
+{
+    snprintf(buf, n, "a %s%s",
+             sign == DRAPE_YREAD_POSITIVE      ? "positive "
+             : sign == DRAPE_YREAD_NONNEGATIVE ? "non-negative "
+                                               : "",
+             noun);
+    return buf;
+}
+
+static int sign_ok(double v, int sign)
+{
+    return (sign != DRAPE_YREAD_POSITIVE || v > 0.0) &&
+           (sign != DRAPE_YREAD_NONNEGATIVE || v >= 0.0);
 }
 
 /* Parse a quantity of dimension dim; noun names it in messages
@@ -98,21 +162,16 @@ int drape_yread_quantity(const drape_yread *r, const drape_ynode *n, const char 
 {
     char expected[96], why[384];
     double v;
-    snprintf(expected, sizeof expected, "a %s%s",
-             sign == DRAPE_YREAD_POSITIVE      ? "positive "
-             : sign == DRAPE_YREAD_NONNEGATIVE ? "non-negative "
-                                               : "",
-             noun);
+    signed_noun(expected, sizeof expected, sign, noun);
     if (drape_yread_want_scalar(r, n, path, expected)) return -1;
     if (drape_units_parse(n->scalar, dim, &v, why, sizeof why) != 0) {
         if (strncmp(why, "expected", 8) == 0)
-            return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT, "%s", why);
-        return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT,
+            return drape_yread_error(r, n, path, DRAPE_E_INPUT, "%s", why);
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT,
                                  "expected %s, got \"%s\": %s", expected, n->scalar, why);
     }
-    if (!isfinite(v) || (sign == DRAPE_YREAD_POSITIVE && !(v > 0.0)) ||
-        (sign == DRAPE_YREAD_NONNEGATIVE && !(v >= 0.0)))
-        return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
+    if (!isfinite(v) || !sign_ok(v, sign))
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
                                  expected, n->scalar);
     *out = v;
     return 0;
@@ -138,6 +197,61 @@ int drape_yread_req_quantity(const drape_yread *r, const drape_ynode *map, const
     const drape_ynode *v = drape_yread_need(r, map, parent, key, example);
     if (!v) return -1;
     return drape_yread_opt_quantity(r, map, parent, key, dim, noun, sign, out, node);
+}
+
+/* A plain number: decimal with an optional exponent, finite. */
+int drape_yread_number(const drape_yread *r, const drape_ynode *n, const char *path, int sign,
+                       double *out)
+{
+    char expected[64], *end = NULL;
+    signed_noun(expected, sizeof expected, sign, "number");
+    if (drape_yread_want_scalar(r, n, path, expected)) return -1;
+    const char *s = n->scalar;
+    int ok = s[0] != 0;
+    for (const char *p = s; *p && ok; p++)
+        if (!isdigit((unsigned char)*p) && !strchr(".eE+-", *p))
+            ok = 0; /* no hex, inf, nan, units */
+    double v = ok ? strtod(s, &end) : 0.0;
+    if (!ok || end == s || *end != 0)
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
+                                 expected, s);
+    if (!isfinite(v))
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT,
+                                 "number out of range: \"%s\"", s);
+    if (!sign_ok(v, sign))
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
+                                 expected, s);
+    *out = v;
+    return 0;
+}
+
+int drape_yread_unit(const drape_yread *r, const drape_ynode *n, const char *path,
+                     drape_dim dim, const char *noun, double *scale)
+{
+    char why[256];
+    drape_dim d;
+    if (drape_yread_want_scalar(r, n, path, "a unit")) return -1;
+    if (drape_units_parse_unit(n->scalar, scale, &d, why, sizeof why))
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "%s", why);
+    if (!drape_units_dim_eq(d, dim))
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT,
+                                 "`%s` is a unit of %s; expected a unit of %s", n->scalar,
+                                 drape_units_dim_name(d), noun);
+    return 0;
+}
+
+int drape_yread_text(const drape_yread *r, const drape_ynode *n, const char *path, int nonempty,
+                     char *buf, size_t cap)
+{
+    if (drape_yread_want_scalar(r, n, path, "text")) return -1;
+    size_t len = strlen(n->scalar);
+    if (len >= cap)
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT,
+                                 "too long (%zu bytes; at most %zu)", len, cap - 1);
+    if (nonempty && len == 0)
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "must not be empty");
+    memcpy(buf, n->scalar, len + 1);
+    return 0;
 }
 
 /* One of names[]; *idx its index.  Suggests the nearest name. */
@@ -174,11 +288,11 @@ int drape_yread_enum(const drape_yread *r, const drape_ynode *n, const char *pat
         if (hits == 1) best = 0;
     }
     if (bi >= 0 && best <= limit)
-        return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT,
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT,
                                  "expected %s, got \"%s\" (did you mean "
                                  "`%s`?)",
                                  expected, n->scalar, names[bi]);
-    return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
+    return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
                              expected, n->scalar);
 }
 
@@ -195,7 +309,7 @@ int drape_yread_bool(const drape_yread *r, const drape_ynode *n, const char *pat
         *out = 0;
         return 0;
     }
-    return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT,
+    return drape_yread_error(r, n, path, DRAPE_E_INPUT,
                              "expected true or false, got %s\"%s\"",
                              n->quoted ? "the quoted string " : "", n->scalar);
 }
@@ -218,7 +332,7 @@ int drape_yread_long(const drape_yread *r, const drape_ynode *n, const char *pat
         if (errno == ERANGE || *end) ok = 0;
     }
     if (!ok || v < lo || v > hi)
-        return drape_ynode_error(r->err, r->doc, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
+        return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
                                  expected, s);
     *out = v;
     return 0;

@@ -548,6 +548,14 @@ START_TEST(test_bad_types)
                  "spacing: 2 cm\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 3, 11, "specimen",
                  "expected a mapping ({key: value, ...}), got a scalar");
+    /* the scalar is quoted back; an empty value is named as such */
+    expect_error("scene: cusick\nfabric: @F\nspecimen: 30 cm\n"
+                 "spacing: 2 cm\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 3, 11, "specimen", "got a scalar (\"30 cm\")");
+    expect_error("scene: cusick\nfabric: @F\nspecimen:\n"
+                 "spacing: 2 cm\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 3, 0, "specimen",
+                 "expected a mapping ({key: value, ...}), got an empty value");
     expect_error("scene: cusick\nfabric: @F\nspacing: [1 cm, 2 cm]\n"
                  "end: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 3, 10, "spacing",
