@@ -68,20 +68,6 @@ typedef struct fit_units {
     char xname[64], yname[64]; /* as written, for messages */
 } fit_units;
 
-static double horner(const drape_fit_piece *p, double x)
-{
-    double y = 0.0;
-    for (int k = p->ncoef - 1; k >= 0; k--) y = y * x + p->c[k];
-    return y;
-}
-
-static double horner_d1(const drape_fit_piece *p, double x)
-{
-    double y = 0.0;
-    for (int k = p->ncoef - 1; k >= 1; k--) y = y * x + k * p->c[k];
-    return y;
-}
-
 /* Read one list of pieces (`bending.warp`) into *fit in the file's units,
  * check it (MODEL.md 3.4), and convert it to SI. */
 static int get_fit(const drape_yread *r, const drape_ynode *list,
@@ -212,15 +198,17 @@ static int get_fit(const drape_yread *r, const drape_ynode *list,
     double vscale = 0.0, sscale = 0.0;
     for (int i = 1; i < fit->n; i++) {
         double x = fit->p[i].from;
-        vscale = fmax(vscale, fmax(fabs(horner(&fit->p[i - 1], x)),
-                                   fabs(horner(&fit->p[i], x))));
-        sscale = fmax(sscale, fmax(fabs(horner_d1(&fit->p[i - 1], x)),
-                                   fabs(horner_d1(&fit->p[i], x))));
+        const drape_fit_piece *a = &fit->p[i - 1], *b = &fit->p[i];
+        vscale = fmax(vscale, fmax(fabs(drape_fit_piece_value(a, x)),
+                                   fabs(drape_fit_piece_value(b, x))));
+        sscale = fmax(sscale, fmax(fabs(drape_fit_piece_slope(a, x)),
+                                   fabs(drape_fit_piece_slope(b, x))));
     }
     for (int i = 1; i < fit->n; i++) {
         double x = fit->p[i].from;
-        double yl = horner(&fit->p[i - 1], x), yr = horner(&fit->p[i], x);
-        double sl = horner_d1(&fit->p[i - 1], x), sr = horner_d1(&fit->p[i], x);
+        const drape_fit_piece *a = &fit->p[i - 1], *b = &fit->p[i];
+        double yl = drape_fit_piece_value(a, x), yr = drape_fit_piece_value(b, x);
+        double sl = drape_fit_piece_slope(a, x), sr = drape_fit_piece_slope(b, x);
         drape_yread_item_path(pp, sizeof pp, path, (size_t)i);
         if (fabs(yr - yl) > DRAPE_FABRIC_KNOT_RTOL * vscale)
             return drape_yread_error(

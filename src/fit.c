@@ -33,6 +33,16 @@ static double poly_d1(const drape_fit_piece *p, double x)
     return y;
 }
 
+double drape_fit_piece_value(const drape_fit_piece *p, double x)
+{
+    return poly(p, x);
+}
+
+double drape_fit_piece_slope(const drape_fit_piece *p, double x)
+{
+    return poly_d1(p, x);
+}
+
 static double poly_d2(const drape_fit_piece *p, double x)
 {
     double y = 0.0;

@@ -52,6 +52,10 @@ void drape_fit_scale(drape_fit *f, double xs, double ys);
  * or -1 if the union has more than DRAPE_FIT_MAX_PIECES pieces. */
 int drape_fit_mean(const drape_fit *a, const drape_fit *b, drape_fit *out);
 
+/* One piece's polynomial and its slope at x (whatever its interval). */
+double drape_fit_piece_value(const drape_fit_piece *p, double x);
+double drape_fit_piece_slope(const drape_fit_piece *p, double x);
+
 /* Largest jump in value and in slope at any knot (absolute, SI). */
 void drape_fit_knot_jumps(const drape_fit *f, double *value_jump,
                           double *slope_jump);
