@@ -53,7 +53,7 @@ static const char batch_usage[] =
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
     "  --t-max T, --max-steps N, --strain-limit X, --method fall|dynamic|static,\n"
     "  --linear-solver NAME, --max-order N, --specimens N, --seed N,\n"
-    "  --fall-time T, --fall-step T, --fall-swing X, --terms LIST (each\n"
+    "  --fall-time T, --fall-step T, --fall-swing X, --fall-tol L, --terms LIST (each\n"
     "  fabric's specimens run one after\n"
     "  another in its process; the results carry the ensemble columns dc_sd,\n"
     "  dc_ci95, dc_mode, nodes_hist, specimens: docs/ensemble.md)\n"
@@ -536,6 +536,10 @@ static int check_quantity(const char *opt, const char *text, drape_dim dim, int 
         fprintf(stderr, "drape: batch: %s: must be positive, got %s\n", opt, text);
         return -1;
     }
+    if (!(v >= 0)) {
+        fprintf(stderr, "drape: batch: %s: must not be negative, got %s\n", opt, text);
+        return -1;
+    }
     return 0;
 }
 
@@ -571,7 +575,8 @@ int drape_cli_batch(int argc, char **argv)
 {
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
            O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
-           O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_FALLSWING, O_TERMS };
+           O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_FALLSWING, O_TERMS,
+           O_FALLTOL };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -593,6 +598,7 @@ int drape_cli_batch(int argc, char **argv)
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"fall-swing", required_argument, NULL, O_FALLSWING},
+        {"fall-tol", required_argument, NULL, O_FALLTOL},
         {"terms", required_argument, NULL, O_TERMS},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
@@ -663,6 +669,10 @@ int drape_cli_batch(int argc, char **argv)
         case O_FALLSTEP:
             name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
             if (check_quantity(name, optarg, DRAPE_DIM_TIME, 1)) return 2;
+            break;
+        case O_FALLTOL:
+            name = "--fall-tol";
+            if (check_quantity(name, optarg, DRAPE_DIM_LENGTH, 0)) return 2;
             break;
         case O_FALLSWING: {
             char *end;

@@ -67,7 +67,9 @@ const char *const drape_cli_run_keys[] = {
      * (bias only where the fabric gives a bias curve) */
     "terms",
     /* ninth session: when the fall ended (it goes on while the cloth swings) */
-    "fall_end_s", NULL};
+    "fall_end_s",
+    /* eleventh session: the fall's error control (--fall-tol), and its steps */
+    "fall_tol_m", "fall_steps", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -206,7 +208,8 @@ static void fabric_warn(void *ctx, const drape_error *w)
  * result as a run (status equilibrium or failed, no time, no integrator
  * statistics).  Frames: the final state only.  Returns 1 on success. */
 static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
-                      double fall_step, double fall_swing, run_ctx *rc, drape_sim_result *res,
+                      double fall_step, double fall_swing, double fall_tol, run_ctx *rc,
+                      drape_sim_result *res,
                       drape_equilibrium_result *er, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
@@ -217,6 +220,7 @@ static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
     eo.dyn_ke_frac = fall_swing; /* and on while the cloth still swings */
     eo.dyn_time_max = DRAPE_FALL_TIME_MAX * fall_time;
     eo.dyn_dt_swing = DRAPE_FALL_SWING_STEP * fall_step; /* at a longer step */
+    eo.dyn_tol = fall_tol; /* or the step chosen by its error (--fall-tol) */
     /* after a fall a limp cloth can still be far from rest: the settling
      * may need more than the static method's iterations (measured: a
      * ponte-roma specimen, 704) */
@@ -340,6 +344,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_time > 0) s.fall_time = ra->fall_time;
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
     if (ra->fall_swing >= 0) s.fall_swing = ra->fall_swing;
+    if (ra->fall_tol >= 0) s.fall_tol = ra->fall_tol;
     if (ra->substeps > 0) s.substeps = ra->substeps;
     if (ra->terms) s.terms = ra->terms;
     if (ri && ri->terms >= 1.0 && ri->terms <= (double)DRAPE_TERM_ALL) /* what ran */
@@ -397,8 +402,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.frame = ri ? ri->frames : 0;
 
     if (method_static) {
-        sim_ok = run_static(m, &f, fall_time, fall_step, drape_scene_fall_swing(&s), &rc, &res,
-                            &er, &err);
+        sim_ok = run_static(m, &f, fall_time, fall_step, drape_scene_fall_swing(&s),
+                            method == DRAPE_METHOD_FALL ? s.fall_tol : 0.0, &rc, &res, &er, &err);
         if (stop_signal) { /* the solve stops at its next iteration */
             interrupted = 1;
             res.status = DRAPE_SIM_INTERRUPTED;
@@ -575,6 +580,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     }
     drape_cli_result_str(&r, "terms", terms);
     drape_cli_result_num(&r, "fall_end_s", method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_end : NAN);
+    drape_cli_result_num(&r, "fall_tol_m",
+                         method == DRAPE_METHOD_FALL && s.fall_tol > 0.0 ? s.fall_tol : NAN);
+    drape_cli_result_int(&r, "fall_steps", method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_steps : NAN);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -102,6 +102,13 @@ static const char run_usage[] =
     "                           time exceeds X of its peak, up to 4 fall times (scene:\n"
     "                           solver.fall_swing; default 0.02; 0 = stop at the\n"
     "                           fall time); result key fall_end_s\n"
+    "  --fall-tol L             the fall's step chosen by its error instead: the\n"
+    "                           largest particle's position error per step at\n"
+    "                           most L (e.g. 10um; from --fall-step/4 within\n"
+    "                           [/64, x8]); closer to the dynamic run's statistics\n"
+    "                           the smaller L, at more CPU (docs/ensemble.md)\n"
+    "                           (scene: solver.fall_tol; default 0 = the fixed\n"
+    "                           step); result key fall_tol_m\n"
     "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
     "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
     "  --seed N                 perturbation seed (of the first specimen)\n"
@@ -172,7 +179,7 @@ int drape_cli_run(int argc, char **argv)
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
            O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
-           O_TERMS, O_FALLSWING };
+           O_TERMS, O_FALLSWING, O_FALLTOL };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -193,6 +200,7 @@ int drape_cli_run(int argc, char **argv)
         {"seed", required_argument, NULL, O_SEED},
         {"terms", required_argument, NULL, O_TERMS},
         {"fall-swing", required_argument, NULL, O_FALLSWING},
+        {"fall-tol", required_argument, NULL, O_FALLTOL},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"substeps", required_argument, NULL, O_SUBSTEPS},
@@ -210,6 +218,7 @@ int drape_cli_run(int argc, char **argv)
     run_args ra;
     memset(&ra, 0, sizeof ra);
     ra.fall_swing = -1.0;
+    ra.fall_tol = -1.0;
     ra.jobs = 0; /* one per core */
     while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
         switch (c) {
@@ -287,6 +296,11 @@ int drape_cli_run(int argc, char **argv)
             if (parse_count(optarg, 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &ra.substeps) != 0)
                 return usage_error("--substeps: expected an integer from 1 to %s, got `%s'",
                                    "10000", optarg);
+            break;
+        case O_FALLTOL:
+            if (parse_quantity("--fall-tol", optarg, DRAPE_DIM_LENGTH, &ra.fall_tol)) return 2;
+            if (!(ra.fall_tol >= 0))
+                return usage_error("--fall-tol: must not be negative, got %s%s", optarg, "");
             break;
         case O_FALLTIME:
         case O_FALLSTEP: {

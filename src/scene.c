@@ -473,7 +473,8 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
 {
     static const char *const keys[] = {"integrator", "rtol", "atol",
                                        "max_order", "method", "fall_time",
-                                       "fall_step", "substeps", "fall_swing", NULL};
+                                       "fall_step", "substeps", "fall_swing", "fall_tol",
+                                       NULL};
     const drape_ynode *m = drape_ynode_get(root, "solver", NULL), *v;
     snprintf(s->integrator, sizeof s->integrator, "%s", "auto");
     s->rtol = SCENE_RTOL;
@@ -511,6 +512,10 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
     if ((v = drape_ynode_get(m, "fall_step", NULL)) != NULL &&
         drape_yread_quantity(c, v, "solver.fall_step", DRAPE_DIM_TIME, "time", DRAPE_YREAD_POSITIVE,
                              &s->fall_step))
+        return -1;
+    if ((v = drape_ynode_get(m, "fall_tol", NULL)) != NULL &&
+        drape_yread_quantity(c, v, "solver.fall_tol", DRAPE_DIM_LENGTH, "length",
+                             DRAPE_YREAD_NONNEGATIVE, &s->fall_tol))
         return -1;
     if ((v = drape_ynode_get(m, "fall_swing", NULL)) != NULL) {
         if (drape_yread_quantity(c, v, "solver.fall_swing", DRAPE_DIM_NONE,

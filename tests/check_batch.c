@@ -307,9 +307,10 @@ START_TEST(test_max_order_passed_on)
 }
 END_TEST
 
-/* --terms and --fall-swing reach the runs (issue 18, ninth session): a
- * fabric with a bias curve runs with the twist term unless --terms leaves
- * it out, and --fall-swing 0 ends every fall at its fall time. */
+/* --terms, --fall-swing and --fall-tol reach the runs (issue 18, ninth and
+ * eleventh sessions): a fabric with a bias curve runs with the twist term
+ * unless --terms leaves it out, --fall-swing 0 ends every fall at its fall
+ * time, and --fall-tol is the tolerance the result reports. */
 START_TEST(test_terms_passed_on)
 {
     for (int k = 0; k < 2; k++) {
@@ -330,14 +331,19 @@ START_TEST(test_terms_passed_on)
     const char *d = subdir("swing0");
     char args[4096];
     snprintf(args, sizeof args,
-             "batch -q ../scenes/cusick.yaml %s --spacing 5cm --specimens 1 --fall-swing 0 --out %s",
+             "batch -q ../scenes/cusick.yaml %s --spacing 5cm --specimens 1 --fall-swing 0 "
+             "--fall-tol 1mm --out %s",
              DENIM, d);
     ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
     table *t = malloc(sizeof *t);
     ck_assert_ptr_nonnull(t);
     load_table(d, t);
     ck_assert_str_eq(cell(t, 0, "fall_end_s"), cell(t, 0, "fall_time_s"));
+    ck_assert_double_eq_tol(strtod(cell(t, 0, "fall_tol_m"), NULL), 1e-3, 1e-15);
     free(t);
+    ck_assert_int_eq(tu_run_drape("batch -q ../scenes/hang.yaml --fall-tol -1mm", out, CAP, err,
+                                  CAP), 2);
+    ck_assert_msg(strstr(err, "--fall-tol"), "%s", err);
     ck_assert_int_eq(tu_run_drape("batch -q ../scenes/hang.yaml --terms bend,twist", out, CAP, err,
                                   CAP), 2);
     ck_assert_msg(strstr(err, "--terms"), "%s", err);

@@ -239,6 +239,55 @@ END_TEST
  * equal histograms is 1; the DC distributions are told apart by the
  * Kolmogorov-Smirnov test (p_dc_dist, the value of the library's test of
  * the same samples) where Welch's test of the means is not significant. */
+/* The fall's error control (eleventh session): solver.fall_tol and
+ * --fall-tol reach the fall (a tighter tolerance takes more steps than a
+ * loose one; 0 is the fixed step: fall_time / fall_step steps), the result
+ * says which (fall_tol_m, fall_steps), and bad values are refused with
+ * the file, line and key or exit 2. */
+START_TEST(test_fall_tol_keys)
+{
+    char args[4096], text[4096], cwd[1024];
+    ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
+    double steps[3];
+    for (int k = 0; k < 3; k++) {
+        snprintf(text, sizeof text,
+                 "scene: cusick\nfabric: %s/../fabrics/cotton-breen.yaml\n"
+                 "specimen: {shape: circle, diameter: 30 cm}\nsupport: {diameter: 18 cm}\n"
+                 "spacing: 3 cm\nperturbation: {amplitude: 0.1 mm, seed: 3}\n"
+                 "solver: {method: fall, fall_time: 0.2 s, fall_step: 10 ms, fall_swing: 0, "
+                 "fall_tol: %s}\n"
+                 "end: {equilibrium: {speed: 1e-4 m/s, window: 0.2 s}, t_max: 20 s}\n",
+                 cwd, k == 0 ? "1 mm" : "1 um");
+        const char *scene = tu_write_file("tol.yaml", text);
+        snprintf(args, sizeof args, "run -q %s%s", scene, k == 2 ? " --fall-tol 0" : "");
+        ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+        json_object *o = json_tokener_parse(out);
+        ck_assert_msg(o != NULL, "%s", out);
+        if (k < 2) ck_assert_close_rel(jnum(o, "fall_tol_m"), k == 0 ? 1e-3 : 1e-6, 1e-12);
+        else ck_assert(isnan(jnum(o, "fall_tol_m")));
+        ck_assert_close_rel(jnum(o, "fall_end_s"), 0.2, 1e-9);
+        steps[k] = jnum(o, "fall_steps");
+        json_object_put(o);
+    }
+    ck_assert_msg(steps[1] > 2 * steps[0], "steps %g (1 mm), %g (1 um)", steps[0], steps[1]);
+    ck_assert_int_eq((int)steps[2], 20);
+    /* bad values */
+    const char *bad[] = {"-1 mm", "thin", "2 s"}; /* a bare number is SI: metres */
+    for (int k = 0; k < 3; k++) {
+        snprintf(text, sizeof text,
+                 "scene: cusick\nfabric: %s/../fabrics/cotton-breen.yaml\n"
+                 "spacing: 3 cm\nsolver: {fall_tol: %s}\nend: {t_max: 1 s}\n", cwd, bad[k]);
+        const char *scene = tu_write_file("tol-bad.yaml", text);
+        snprintf(args, sizeof args, "run -q %s", scene);
+        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
+        ck_assert_msg(strstr(err, "tol-bad.yaml:4:") && strstr(err, "solver.fall_tol"), "%s", err);
+    }
+    ck_assert_int_eq(tu_run_drape("run --fall-tol x", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --fall-tol -1um", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --fall-tol 3s", out, CAP, err, CAP), 2);
+}
+END_TEST
+
 START_TEST(test_compare_distributions)
 {
     char a[4096] = "{\"specimens\": [", b[4096] = "{\"specimens\": [";
@@ -303,6 +352,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_ensemble_csv);
     tcase_add_test(tc, test_ensemble_failures);
     tcase_add_test(tc, test_scene_keys);
+    tcase_add_test(tc, test_fall_tol_keys);
     tcase_add_test(tc, test_compare_distributions);
     tcase_add_test(tc, test_bias_warnings_with_term);
     suite_add_tcase(s, tc);

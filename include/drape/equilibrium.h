@@ -8,7 +8,8 @@
  * seeded perturbation that breaks the symmetry).
  *
  *  0. Optional (dyn_time > 0): damped implicit dynamics (linearly implicit
- *     BDF2, fixed step, the model's own damping) from rest for dyn_time.
+ *     BDF2, fixed step or one chosen by its error in position (dyn_tol),
+ *     the model's own damping) from rest for dyn_time.
  *  1. Pseudo-transient continuation: backward-Euler-from-rest steps
  *       (M / dt^2 + Hc) dx = F,    Hc = Hess E_pot, compressed springs
  *     clamped when clamp_k is given, dt grown by switched evolution
@@ -77,6 +78,13 @@ typedef struct drape_equilibrium_opts {
     double dyn_dt_swing; /* s: the step of the dynamics past dyn_time (the
                             slow swing after the folds have formed); 0 =
                             dyn_dt */
+    double dyn_tol;      /* m; > 0: the step of the dynamics is chosen by
+                            their local error in position instead (the
+                            largest particle's estimate at most dyn_tol per
+                            step; variable-step BDF2, a step above 1.5
+                            dyn_tol redone shorter), from dyn_dt / 4, within
+                            [dyn_dt / 64, 8 dyn_dt]; dyn_dt_swing is then
+                            not used.  0 = the fixed step dyn_dt (default) */
     int dyn_only;        /* 1: return after the damped dynamics (status
                             DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
@@ -121,6 +129,9 @@ typedef struct drape_equilibrium_result {
     int dyn_refused;      /* swing steps at dyn_dt_swing refused because the
                              total energy rose (then dyn_dt on) */
     double dyn_end;       /* s: when the damped dynamics ended */
+    int dyn_rejected;     /* steps redone shorter by the error control
+                             (dyn_tol) */
+    double dyn_dt_min, dyn_dt_max; /* s: the shortest and longest step taken */
     int ptc_steps;        /* accepted PTC steps */
     int newton_steps;     /* accepted Newton steps */
     int rejected;         /* iterations whose step was refused */

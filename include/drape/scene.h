@@ -124,6 +124,10 @@ typedef struct drape_scene {
                                       fall goes on past fall_time while the
                                       kinetic energy exceeds this fraction of
                                       its peak; < 0 = DRAPE_FALL_SWING, 0 = off */
+    double fall_tol;               /* solver.fall_tol, m (eleventh session): > 0:
+                                      the fall's step is chosen by its error
+                                      in position (drape_equilibrium_opts.
+                                      dyn_tol); 0 = the fixed fall_step */
     int substeps;                  /* solver.substeps: animate steps per frame
                                       interval; 0 = DRAPE_ANIMATE_SUBSTEPS (added,
                                       issue 16) */
