@@ -528,8 +528,9 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  * its largest particle norm e is kept below dyn_tol (a step with e > 1.5
  * dyn_tol is redone), and the next step is 0.9 (dyn_tol / e)^(1/3) times
  * this one (1/4 to 2 times, within [dyn_dt / 64, 8 dyn_dt]).  Positions,
- * not velocities: the stretch vibrations that the fall excites move the
- * particles by micrometres and are damped by the step, not followed.
+ * not velocities: the stretch vibrations that the fall excites are large
+ * in velocity but small in position (a strain of 1e-4 is a micrometre at
+ * 1 cm), and are damped by the step, not followed.
  * Returns 0, 1 (folded or too small a step), 2 (stop raised) or -1 (err
  * set). */
 static int damped_dynamics(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
