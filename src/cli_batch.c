@@ -524,7 +524,9 @@ static int usage_error(const char *fmt, const char *a)
     return drape_error_exit_status(DRAPE_E_USAGE);
 }
 
-static int check_quantity(const char *opt, const char *text, drape_dim dim, int positive_only)
+/* A quantity of dimension dim given to option opt: > 0 with positive,
+ * >= 0 without (usage error otherwise). */
+static int check_quantity(const char *opt, const char *text, drape_dim dim, int positive)
 {
     char why[256];
     double v;
@@ -532,7 +534,7 @@ static int check_quantity(const char *opt, const char *text, drape_dim dim, int 
         fprintf(stderr, "drape: batch: %s: %s\nTry `drape batch --help'.\n", opt, why);
         return -1;
     }
-    if (positive_only && !(v > 0)) {
+    if (positive && !(v > 0)) {
         fprintf(stderr, "drape: batch: %s: must be positive, got %s\n", opt, text);
         return -1;
     }

@@ -553,6 +553,31 @@ static double chain_fall_error(drape_model *m, const drape_lattice *L, drape_equ
     return e;
 }
 
+/* A fall test's chain, released horizontally, with its tight reference at
+ * time t (chain_tight) and the height it has dropped by then. */
+typedef struct chain_case {
+    drape_lattice *L;
+    drape_model *m;
+    drape_sim_result ref;
+    double drop;
+} chain_case;
+
+static void chain_case_new(chain_case *c, double t)
+{
+    const double dir[3] = {1.0, 0.0, 0.0};
+    c->L = chain_new(dir);
+    c->m = chain_model(c->L);
+    chain_tight(c->m, t, &c->ref);
+    c->drop = chain_drop(c->L, c->ref.x);
+}
+
+static void chain_case_free(chain_case *c)
+{
+    drape_sim_result_free(&c->ref);
+    drape_model_free(c->m);
+    drape_lattice_free(c->L);
+}
+
 /* The fall method's dynamics (dyn_time, dyn_only: the state after the
  * fall, no minimisation) against an independent tight integration: the
  * chain released horizontally swings down for 0.2 s; cvode-bdf at rtol
@@ -562,13 +587,10 @@ static double chain_fall_error(drape_model *m, const drape_lattice *L, drape_equ
  * Jacobian in compressed edges; the error must still fall with the step. */
 START_TEST(test_fall_converges)
 {
-    const double dir[3] = {1.0, 0.0, 0.0};
-    drape_lattice *L = chain_new(dir);
-    drape_model *m = chain_model(L);
-    drape_sim_result sr;
-    chain_tight(m, 0.2, &sr);
-    double e[3], drop = chain_drop(L, sr.x);
-    ck_assert(drop > 0.05); /* it has swung down several centimetres */
+    chain_case ch;
+    chain_case_new(&ch, 0.2);
+    double e[3];
+    ck_assert(ch.drop > 0.05); /* it has swung down several centimetres */
     for (int q = 0; q < 3; q++) {
         drape_equilibrium_opts o;
         drape_equilibrium_opts_default(&o);
@@ -576,21 +598,19 @@ START_TEST(test_fall_converges)
         o.dyn_time = 0.2;
         o.dyn_dt = 0.004 / (1 << q);
         drape_equilibrium_result r;
-        e[q] = chain_fall_error(m, L, &o, sr.x, &r);
+        e[q] = chain_fall_error(ch.m, ch.L, &o, ch.ref.x, &r);
         ck_assert_int_eq(r.dyn_steps, 50 << q);
         drape_equilibrium_result_free(&r);
     }
     if (_i == 0) {
         ck_assert_msg(e[1] / e[2] > 3.0 && e[1] / e[2] < 5.5 && e[0] / e[1] > 3.0,
                       "errors %.3g %.3g %.3g m (step 4, 2, 1 ms)", e[0], e[1], e[2]);
-        ck_assert_msg(e[2] < 0.01 * drop, "error %.3g m at 1 ms, drop %.3g m", e[2], drop);
+        ck_assert_msg(e[2] < 0.01 * ch.drop, "error %.3g m at 1 ms, drop %.3g m", e[2], ch.drop);
     } else {
-        ck_assert_msg(e[2] < e[1] && e[1] < e[0] && e[2] < 0.02 * drop,
+        ck_assert_msg(e[2] < e[1] && e[1] < e[0] && e[2] < 0.02 * ch.drop,
                       "errors %.3g %.3g %.3g m (step 4, 2, 1 ms)", e[0], e[1], e[2]);
     }
-    drape_sim_result_free(&sr);
-    drape_model_free(m);
-    drape_lattice_free(L);
+    chain_case_free(&ch);
 }
 END_TEST
 
@@ -644,12 +664,9 @@ END_TEST
  * keeps a long step from pumping energy into a compressed hem). */
 START_TEST(test_fall_swing_step)
 {
-    const double dir[3] = {1.0, 0.0, 0.0};
-    drape_lattice *L = chain_new(dir);
-    drape_model *m = chain_model(L);
-    drape_sim_result sr;
-    chain_tight(m, 0.3, &sr);
-    double drop = chain_drop(L, sr.x), e[3];
+    chain_case ch;
+    chain_case_new(&ch, 0.3);
+    double e[3];
     int steps[3];
     for (int c = 0; c < 3; c++) { /* 2 ms then 4 ms; 2 ms; 4 ms */
         drape_equilibrium_opts o;
@@ -660,7 +677,7 @@ START_TEST(test_fall_swing_step)
         o.dyn_ke_frac = 0.05;
         o.dyn_time_max = 0.3;
         drape_equilibrium_result r;
-        e[c] = chain_fall_error(m, L, &o, sr.x, &r);
+        e[c] = chain_fall_error(ch.m, ch.L, &o, ch.ref.x, &r);
         ck_assert_double_eq_tol(r.dyn_end, 0.3, 1e-12);
         ck_assert_int_eq(r.dyn_refused, 0); /* the energy falls at 4 ms too */
         steps[c] = r.dyn_steps;
@@ -669,12 +686,10 @@ START_TEST(test_fall_swing_step)
     ck_assert_int_eq(steps[0], 125);
     ck_assert_int_eq(steps[1], 150);
     ck_assert_int_eq(steps[2], 75);
-    ck_assert_msg(e[1] < e[0] && e[0] < 1.2 * e[2] && e[0] < 0.02 * drop,
+    ck_assert_msg(e[1] < e[0] && e[0] < 1.2 * e[2] && e[0] < 0.02 * ch.drop,
                   "errors %.3g (2 then 4 ms), %.3g (2 ms), %.3g m (4 ms); drop %.3g m",
-                  e[0], e[1], e[2], drop);
-    drape_sim_result_free(&sr);
-    drape_model_free(m);
-    drape_lattice_free(L);
+                  e[0], e[1], e[2], ch.drop);
+    chain_case_free(&ch);
 }
 END_TEST
 
@@ -688,12 +703,9 @@ END_TEST
  * the steps vary (the swing speeds up). */
 START_TEST(test_fall_tol)
 {
-    const double dir[3] = {1.0, 0.0, 0.0};
-    drape_lattice *L = chain_new(dir);
-    drape_model *m = chain_model(L);
-    drape_sim_result sr;
-    chain_tight(m, 0.2, &sr);
-    double e[3], drop = chain_drop(L, sr.x);
+    chain_case ch;
+    chain_case_new(&ch, 0.2);
+    double e[3];
     int steps[3];
     for (int q = 0; q < 3; q++) {
         drape_equilibrium_opts o;
@@ -702,7 +714,7 @@ START_TEST(test_fall_tol)
         o.dyn_dt = 0.004;
         o.dyn_tol = 1e-4 / pow(10.0, q);
         drape_equilibrium_result r;
-        e[q] = chain_fall_error(m, L, &o, sr.x, &r);
+        e[q] = chain_fall_error(ch.m, ch.L, &o, ch.ref.x, &r);
         steps[q] = r.dyn_steps;
         ck_assert_double_eq_tol(r.dyn_end, 0.2, 1e-12);
         ck_assert_msg(e[q] <= 1.5 * o.dyn_tol * steps[q], "error %.3g m in %d steps at %g m",
@@ -718,10 +730,8 @@ START_TEST(test_fall_tol)
         double g = (double)steps[q + 1] / steps[q];
         ck_assert_msg(g > 1.7 && g < 2.8, "steps %d %d %d", steps[0], steps[1], steps[2]);
     }
-    ck_assert_msg(e[2] < 1e-3 * drop, "error %.3g m, drop %.3g m", e[2], drop);
-    drape_sim_result_free(&sr);
-    drape_model_free(m);
-    drape_lattice_free(L);
+    ck_assert_msg(e[2] < 1e-3 * ch.drop, "error %.3g m, drop %.3g m", e[2], ch.drop);
+    chain_case_free(&ch);
 }
 END_TEST
 
