@@ -565,9 +565,15 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         drape_cli_result_num(&r, "step_s", animate ? step : NAN);
         drape_cli_result_int(&r, "substeps", animate ? nsub : NAN);
         int bal = !method_static && rc.n_energy > 0;
-        drape_cli_result_num(&r, "energy_total_start_J", bal ? rc.e_start : NAN);
-        drape_cli_result_num(&r, "energy_total_end_J", bal ? rc.e_end : NAN);
-        drape_cli_result_num(&r, "energy_max_rise_J", bal && rc.n_energy > 1 ? rc.e_max_rise : NAN);
+        /* the fall: the balance of its dynamics, over every step */
+        int fall = method == DRAPE_METHOD_FALL && sim_ok;
+        drape_cli_result_num(&r, "energy_total_start_J",
+                             bal ? rc.e_start : fall ? er.dyn_e_start : NAN);
+        drape_cli_result_num(&r, "energy_total_end_J",
+                             bal ? rc.e_end : fall ? er.dyn_e_end : NAN);
+        drape_cli_result_num(&r, "energy_max_rise_J",
+                             bal && rc.n_energy > 1 ? rc.e_max_rise
+                             : fall ? er.dyn_e_max_rise : NAN);
         drape_cli_result_num(&r, "max_strain_peak", bal ? rc.strain_peak : NAN);
         drape_cli_result_int(&r, "energy_rescales", animate ? res.stats.energy_rescales : NAN);
     }

@@ -132,6 +132,13 @@ typedef struct drape_equilibrium_result {
     int dyn_rejected;     /* steps redone shorter by the error control
                              (dyn_tol) */
     double dyn_dt_min, dyn_dt_max; /* s: the shortest and longest step taken */
+    double dyn_e_start, dyn_e_end; /* J: kinetic + potential energy at the
+                                      start and the end of the dynamics (NaN
+                                      without a dynamics stage) */
+    double dyn_e_max_rise; /* J: the largest rise of that total over one step
+                              (negative: it fell at every step; NaN without
+                              a step).  The model dissipates, so a rise is
+                              the integrator's (docs/ensemble.md) */
     int ptc_steps;        /* accepted PTC steps */
     int newton_steps;     /* accepted Newton steps */
     int rejected;         /* iterations whose step was refused */
