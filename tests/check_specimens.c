@@ -290,17 +290,20 @@ END_TEST
 
 /* The fall's energy balance (energy_total_start_J, energy_total_end_J,
  * energy_max_rise_J over its steps).  The model dissipates, so the total
- * energy must fall; on the default scene at 1 cm, seed 3, the error-
- * controlled fall with the fixed step's clamped matrix gained 0.8 % of the
- * energy it dissipates in a single step and swung on to the longest fall
- * (measured); with the exact Jacobian no step gains 0.1 %. */
+ * energy must fall.  On the default scene at 1 cm, seed 3, the error-
+ * controlled fall gained energy in single steps and swung on to the
+ * longest fall (measured): at 30 um with the fixed step's clamped matrix
+ * 0.8 % of the energy it dissipates in all, at 100 um with the exact
+ * Jacobian 2 %.  With the exact Jacobian and steps that gain energy redone
+ * (DRAPE_EQ_FALL_RISE) no step gains 0.1 %, and the fall ends. */
 START_TEST(test_fall_energy_balance)
 {
     char args[4096], cwd[1024];
     ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
-    for (int k = 0; k < 2; k++) {
+    const char *tol[] = {" --fall-tol 30um", " --fall-tol 100um", ""};
+    for (int k = 0; k < 3; k++) {
         snprintf(args, sizeof args, "run -q %s/../scenes/cusick.yaml --specimens 1 --seed 3%s",
-                 cwd, k == 0 ? " --fall-tol 30um" : "");
+                 cwd, tol[k]);
         ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
         json_object *o = json_tokener_parse(out);
         ck_assert_msg(o != NULL, "%s", out);
@@ -310,11 +313,11 @@ START_TEST(test_fall_energy_balance)
         /* the flat start: gravity at the perturbation's height, a little
          * bending; the hanging skirt about 0.8 mJ lower */
         ck_assert_msg(e1 < e0 - 5e-4, "E %g -> %g J", e0, e1);
-        if (k == 0) {
-            ck_assert_msg(rise < 1e-3 * (e0 - e1), "a step gained %g J of %g J dissipated", rise,
-                          e0 - e1);
+        if (k < 2) {
+            ck_assert_msg(rise < 1e-3 * (e0 - e1), "%s: a step gained %g J of %g J dissipated",
+                          tol[k], rise, e0 - e1);
             ck_assert_msg(jnum(o, "fall_end_s") < 3.0 * jnum(o, "fall_time_s"),
-                          "the fall swung on to %g s", jnum(o, "fall_end_s"));
+                          "%s: the fall swung on to %g s", tol[k], jnum(o, "fall_end_s"));
         }
         json_object_put(o);
     }

@@ -84,7 +84,12 @@ typedef struct drape_equilibrium_opts {
                             step; variable-step BDF2, a step above 1.5
                             dyn_tol redone shorter), from dyn_dt / 4, within
                             [dyn_dt / 64, 8 dyn_dt]; dyn_dt_swing is then
-                            not used.  0 = the fixed step dyn_dt (default) */
+                            not used.  Such a step uses the exact Jacobian
+                            (no compression clamp), and one whose total
+                            energy rises by more than 1e-4 of the energy
+                            dissipated so far is redone at half the step
+                            (counted in dyn_refused).  0 = the fixed step
+                            dyn_dt (default) */
     int dyn_only;        /* 1: return after the damped dynamics (status
                             DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
@@ -126,8 +131,10 @@ typedef struct drape_equilibrium_result {
     int iterations;       /* iterations of the loop (each factorises once,
                              twice when Newton falls back to Hc) */
     int dyn_steps;        /* damped dynamics steps */
-    int dyn_refused;      /* swing steps at dyn_dt_swing refused because the
-                             total energy rose (then dyn_dt on) */
+    int dyn_refused;      /* steps refused because the total energy rose:
+                             swing steps at dyn_dt_swing (then dyn_dt on),
+                             or steps of the error-controlled fall (redone
+                             at half the step) */
     double dyn_end;       /* s: when the damped dynamics ended */
     int dyn_rejected;     /* steps redone shorter by the error control
                              (dyn_tol) */
