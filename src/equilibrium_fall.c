@@ -1,0 +1,317 @@
+/* equilibrium_fall.c: the fall (E9 of equilibrium.c), the damped implicit
+ * dynamics that the fall method runs before the static solver settles the
+ * cloth: linearly implicit BDF2 at a fixed step (with the swing criterion
+ * and its longer step) or at a step chosen by its error in position
+ * (dyn_tol), and the energy balance of every step.  docs/ensemble.md. */
+#include <math.h>
+#include <string.h>
+
+#include "drape/alloc.h"
+#include "equilibrium_impl.h"
+
+/* The fall's swing at the long step: the largest rise of the total energy
+ * (in units of the peak kinetic energy) before the long step is refused.
+ * At the fall's own step the rises measured in the swing of the Cusick
+ * scene (cotton, tablecloth, jacket at 1 cm) stay below 0.12 % per step
+ * (BDF2 is not energy-monotone). */
+#define DRAPE_EQ_SWING_RISE 1e-2
+/* (E9) The error-controlled fall (dyn_tol): a step whose total energy rises
+ * by more than this fraction of the energy dissipated so far is redone at
+ * half the step (BDF1 restart).  The model dissipates; a rise is the
+ * linearly implicit step's, which at long steps pumped energy into folds
+ * and kept the cloth swinging (measured on the Cusick scene at 1 cm and
+ * 100 um: rises of 1e-2 of the dissipated energy in one step, the fall run
+ * to its longest; with 1e-2 here they go on, with 1e-3 and 1e-4 they
+ * stop; docs/ensemble.md). */
+#define DRAPE_EQ_FALL_RISE 1e-4
+/* The longest ring of kinetic energies the fall's swing criterion keeps
+ * (its window at the shortest step). */
+#define DRAPE_EQ_KE_WINDOW_MAX 65536
+
+/* Kinetic energy of the free particles at velocities v (3n), J. */
+static double kinetic_energy(const eq_work *w, const double *v)
+{
+    double ke = 0.0;
+    for (int p = 0; p < w->nf; p++) {
+        const double *vi = v + 3 * (long)w->L->free_to_id[p];
+        ke += 0.5 * w->mrow[3 * p] * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
+    }
+    return ke;
+}
+
+/* Kinetic + potential energy at (x, v), J; INFINITY where folded. */
+static double total_energy(eq_work *w, const double *x, const double *v)
+{
+    drape_energies E;
+    w->r->force_evals++;
+    if (drape_model_energy(w->m, x, &E) != 0) return INFINITY;
+    return kinetic_energy(w, v) + E.stretch + E.bend + E.shear + E.gravity;
+}
+
+/* (E9) Damped implicit dynamics: M x'' = f(x, v) (all of the model's
+ * parts, its damping included) from rest, by linearly implicit BDF2
+ * (BDF1 = backward Euler for the first step and after a refused
+ * factorisation):
+ *     x_{n+1} = xh + b h v_{n+1},  M (v_{n+1} - vh) = b h f(x_{n+1}, v_{n+1})
+ *     BDF1: xh = x_n, vh = v_n, b = 1;
+ *     BDF2: xh = (4 x_n - x_{n-1})/3, vh = (4 v_n - v_{n-1})/3, b = 2/3,
+ *     and with steps of ratio r = h_n / h_{n-1} (o->dyn_tol):
+ *     xh = ((1 + r)^2 x_n - r^2 x_{n-1}) / (1 + 2 r), the same for vh,
+ *     b = (1 + r) / (1 + 2 r),
+ * one Newton iteration from v = v_n (x0 = xh + b h v_n):
+ *     (M - b h D - (b h)^2 K) dv = M (vh - v_n) + b h f(x0, v_n),
+ * K, D at (x0, v_n).  Runs for time o->dyn_time (it follows the physical
+ * fall, with inertia, into the basin that the dynamic run would reach),
+ * then, with o->dyn_ke_frac > 0, on while the cloth swings (up to T_max)
+ * at the step o->dyn_dt_swing (0 = dyn_dt), from a BDF1 step.
+ *
+ * With o->dyn_tol > 0 the step is chosen instead: the local error of the
+ * positions is estimated from the difference between the BDF2 result and
+ * the quadratic through x_{n-1}, x_n with slope v_n (for BDF2 the error is
+ * 2/5 of that difference at constant step: error constants -2/9 and 1/3),
+ * its largest particle norm e is kept below dyn_tol (a step with e > 1.5
+ * dyn_tol is redone), and the next step is 0.9 (dyn_tol / e)^(1/3) times
+ * this one (1/4 to 2 times, within [dyn_dt / 64, 8 dyn_dt]).  Positions,
+ * not velocities: the stretch vibrations that the fall excites are large
+ * in velocity but small in position (a strain of 1e-4 is a micrometre at
+ * 1 cm), and are damped by the step, not followed.  Its matrix is the
+ * exact one (no compression clamp), and a step whose total energy rises by
+ * more than DRAPE_EQ_FALL_RISE of the energy dissipated so far is redone
+ * at half the step: the position estimate does not see a step that pumps
+ * energy into a fold.  Every step's total energy is recorded (r->dyn_e_*).
+ * Returns 0, 1 (folded or too small a step), 2 (stop raised) or -1 (err
+ * set). */
+int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
+            drape_error *err)
+{
+    unsigned parts_all = drape_model_parts(w->m);
+    const drape_lattice *L = w->L;
+    const drape_pattern *P = w->pat;
+    drape_equilibrium_result *r = w->r;
+    const double T = o->dyn_time, ke_frac = o->dyn_ke_frac, tol = o->dyn_tol;
+    const int adaptive = tol > 0.0;
+    double h = adaptive ? 0.25 * o->dyn_dt : o->dyn_dt;
+    double h_swing = adaptive ? 0.0 : o->dyn_dt_swing;
+    const double h_min = o->dyn_dt / 64.0, h_max = 8.0 * o->dyn_dt;
+    size_t n3 = 3 * (size_t)L->n;
+    double *xp = w->xz, *vp = w->fz, *x0 = w->xt, *v = w->vel;  /* previous step, trial */
+    memset(v, 0, sizeof(double) * n3);
+    double t = 0.0, ke_peak = 0.0, ke_win = 0.0, tw = 0.2 * T;
+    /* the kinetic energy's largest value over the last tw = T / 5 (two
+     * pendulum times of the Cusick fall), so that a swing's turning point
+     * does not end the fall: a ring of the last nwin steps' (t, E_kin),
+     * enough for tw at the shortest step */
+    double h_short = adaptive ? h_min : fmin(h, h_swing > 0.0 ? h_swing : h);
+    int nwin = (int)ceil(tw / h_short) + 1, iw = 0;
+    if (nwin > DRAPE_EQ_KE_WINDOW_MAX) nwin = DRAPE_EQ_KE_WINDOW_MAX;
+    double *ring = drape_malloc(2 * (size_t)nwin * sizeof(double)), *ring_t = ring + nwin;
+    if (!ring)
+        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+    for (int k = 0; k < nwin; k++) { /* no step yet */
+        ring[k] = 0.0;
+        ring_t[k] = -INFINITY;
+    }
+    int have_prev = 0, swinging = 0, long_step = 0;
+    double h_fall = h, e_low = INFINITY; /* the lowest total energy at the long step */
+    double h_prev = 0.0;                 /* the last step taken */
+    int rc = 0;
+    r->dyn_steps = 0;
+    r->dyn_dt_min = INFINITY;
+    r->dyn_dt_max = 0.0;
+    double e_prev = total_energy(w, x, v);
+    r->dyn_e_start = r->dyn_e_end = e_prev;
+    r->dyn_e_max_rise = NAN;
+    double e_low_all = e_prev; /* the lowest total energy so far */
+    for (;;) {
+        /* past T, go on (whole steps, the last one cut at T_max) while the
+         * cloth still swings, at the step h_swing (BDF1 restart) */
+        int extend = 0;
+        if (t >= T * (1.0 - 1e-12)) {
+            if (!(ke_frac > 0.0) || ke_win <= ke_frac * ke_peak || t >= T_max * (1.0 - 1e-12))
+                break;
+            extend = 1;
+            if (!swinging && h_swing > 0.0 && h_swing != h) {
+                h = h_swing;
+                have_prev = 0;
+                long_step = 1;
+                e_low = total_energy(w, x, v);
+            }
+            swinging = 1;
+        }
+        if (o->stop && *o->stop) { rc = 2; break; }
+        double rem = (extend ? T_max : T) - t;
+        /* a whole step when the rest is h but for rounding: no BDF1
+         * restart */
+        double hs = rem > h * (1.0 - 1e-9) ? h : rem;
+        int bdf2 = have_prev;
+        double b = bdf2 ? 2.0 / 3.0 : 1.0, c1 = 4.0 / 3.0, c2 = -1.0 / 3.0;
+        if (bdf2 && adaptive) {
+            double q = hs / h_prev;
+            c1 = (1.0 + q) * (1.0 + q) / (1.0 + 2.0 * q);
+            c2 = -q * q / (1.0 + 2.0 * q);
+            b = (1.0 + q) / (1.0 + 2.0 * q);
+        }
+        double bh = b * hs;
+        /* predictor x0 = xh + b h v_n; the free part of M (vh - v_n) */
+        memcpy(x0, x, sizeof(double) * n3);
+        for (int p = 0; p < w->nf; p++) {
+            long k = 3 * (long)L->free_to_id[p];
+            for (int c = 0; c < 3; c++) {
+                double xh, vh;
+                if (!bdf2) {
+                    xh = x[k + c];
+                    vh = v[k + c];
+                } else if (!adaptive) { /* the fixed step's own arithmetic */
+                    xh = (4.0 * x[k + c] - xp[k + c]) / 3.0;
+                    vh = (4.0 * v[k + c] - vp[k + c]) / 3.0;
+                } else {
+                    xh = c1 * x[k + c] + c2 * xp[k + c];
+                    vh = c1 * v[k + c] + c2 * vp[k + c];
+                }
+                x0[k + c] = xh + bh * v[k + c];
+                w->rch[3 * p + c] = w->mrow[3 * p] * (vh - v[k + c]);
+            }
+        }
+        r->force_evals++;
+        r->jacobian_evals++;
+        if (drape_model_forces(w->m, parts_all, x0, v, w->fd) != 0 ||
+            drape_model_jacobian(w->m, parts_all, x0, v, w->K, w->D) != 0) {
+            if (h < 1e-6 * T) { rc = 1; break; }
+            h *= 0.5;
+            have_prev = 0;
+            continue;
+        }
+        /* the fixed step's matrix drops the compressed springs' negative
+         * stiffness (E8), to stay positive definite at long steps; the
+         * error-controlled step keeps the exact Jacobian: with the clamp
+         * its linearly implicit step, a W-method where springs are
+         * compressed, pumped energy into folds (measured on the Cusick
+         * scene at 1 cm: the total energy rose by 25 % of the fall's peak
+         * kinetic energy and the cloth never stopped swinging), and its
+         * steps are short enough for the exact matrix (a matrix that is
+         * not positive definite halves the step) */
+        const double *Kc = NULL;
+        if (w->Kc && !adaptive) {
+            drape_model_compression_clamp(w->m, x0, w->kclamp, w->Kc);
+            Kc = w->Kc;
+        }
+        double *ax = w->A->x;
+        for (int64_t k = 0; k < P->nnz; k++)
+            ax[k] = -bh * w->D[k] - bh * bh * (w->K[k] + (Kc ? Kc[k] : 0.0));
+        for (long j = 0; j < w->N; j++) ax[w->dpos[j]] += w->mrow[j];
+        int pd = eq_factorize(w, err);
+        if (pd < 0) { rc = -1; break; }
+        if (pd == 0) { /* too long a step for the negative curvature */
+            if (h < 1e-6 * T) { rc = 1; break; }
+            h *= 0.5;
+            have_prev = 0;
+            continue;
+        }
+        for (int p = 0; p < w->nf; p++) {
+            long k = 3 * (long)L->free_to_id[p];
+            for (int c = 0; c < 3; c++) w->rch[3 * p + c] += bh * w->fd[k + c];
+        }
+        if (eq_solve(w, w->rch, w->dy, err) != 0) { rc = -1; break; }
+        double h_next = h;
+        if (adaptive) {
+            double grow = 1.0; /* after a BDF1 step: no estimate */
+            if (bdf2) {
+                double e2 = 0.0;
+                for (int p = 0; p < w->nf; p++) {
+                    long k = 3 * (long)L->free_to_id[p];
+                    double d2 = 0.0;
+                    for (int c = 0; c < 3; c++) {
+                        double cq = (xp[k + c] - x[k + c] + v[k + c] * h_prev) / (h_prev * h_prev);
+                        double xq = x[k + c] + hs * (v[k + c] + cq * hs);
+                        double d = 0.4 * (x0[k + c] + bh * w->dy[3 * p + c] - xq);
+                        d2 += d * d;
+                    }
+                    if (d2 > e2) e2 = d2;
+                }
+                double e = sqrt(e2) / tol;
+                grow = e > 0.0 ? 0.9 * pow(e, -1.0 / 3.0) : 2.0;
+                grow = grow > 2.0 ? 2.0 : grow < 0.25 ? 0.25 : grow;
+                if (e > 1.5 && hs > h_min * (1.0 + 1e-9)) { /* redo it shorter */
+                    h = fmax(hs * grow, h_min);
+                    r->dyn_rejected++;
+                    continue;
+                }
+            }
+            h_next = fmin(fmax(hs * grow, h_min), h_max);
+        }
+        /* shift history, update */
+        memcpy(xp, x, sizeof(double) * n3);
+        memcpy(vp, v, sizeof(double) * n3);
+        for (int p = 0; p < w->nf; p++) {
+            long k = 3 * (long)L->free_to_id[p];
+            for (int c = 0; c < 3; c++) {
+                v[k + c] += w->dy[3 * p + c];
+                x[k + c] = x0[k + c] + bh * w->dy[3 * p + c];
+            }
+        }
+        have_prev = adaptive || hs == h;
+        h_prev = hs;
+        h = h_next;
+        t += hs;
+        r->dyn_steps++;
+        if (hs < r->dyn_dt_min) r->dyn_dt_min = hs;
+        if (hs > r->dyn_dt_max) r->dyn_dt_max = hs;
+        /* the energy balance of every step (the long step's guard below
+         * uses it too) */
+        double e_now = total_energy(w, x, v);
+        if (adaptive && e_now - e_prev > DRAPE_EQ_FALL_RISE * (r->dyn_e_start - e_low_all) &&
+            hs > h_min * (1.0 + 1e-9)) { /* gained energy: redo it shorter */
+            memcpy(x, xp, sizeof(double) * n3);
+            memcpy(v, vp, sizeof(double) * n3);
+            t -= hs;
+            r->dyn_steps--;
+            h = fmax(0.5 * hs, h_min);
+            have_prev = 0;
+            r->dyn_refused++;
+            continue;
+        }
+        if (e_now < e_low_all) e_low_all = e_now;
+        if (ke_frac > 0.0) {
+            double ke = kinetic_energy(w, v);
+            if (long_step) {
+                /* the model dissipates: its total energy cannot rise.  At
+                 * the long step the linearly implicit step (whose matrix
+                 * drops the compressed springs' negative stiffness) can
+                 * pump energy into a compressed hem (measured on the table
+                 * scene: +1.5 % of the peak kinetic energy in five steps).
+                 * A rise above DRAPE_EQ_SWING_RISE of the peak kinetic
+                 * energy over the lowest total energy since the change of
+                 * step refuses the step, and the swing goes on at the
+                 * fall's own step. */
+                double e = e_now;
+                if (!(e <= e_low + DRAPE_EQ_SWING_RISE * ke_peak)) {
+                    memcpy(x, xp, sizeof(double) * n3);
+                    memcpy(v, vp, sizeof(double) * n3);
+                    t -= hs;
+                    r->dyn_steps--;
+                    h = h_fall;
+                    have_prev = 0;
+                    long_step = 0;
+                    r->dyn_refused++;
+                    continue;
+                }
+                if (e < e_low) e_low = e;
+            }
+            if (ke > ke_peak) ke_peak = ke;
+            ring[iw] = ke;
+            ring_t[iw] = t;
+            iw = (iw + 1) % nwin;
+            ke_win = 0.0; /* over the steps that ended in (t - tw, t] (the
+                             window is full by T >= 5 tw) */
+            for (int k = 0; k < nwin; k++)
+                if (ring[k] > ke_win && ring_t[k] > t - tw * (1.0 - 1e-9)) ke_win = ring[k];
+        }
+        double rise = e_now - e_prev;
+        if (!isnan(rise) && !(rise <= r->dyn_e_max_rise)) r->dyn_e_max_rise = rise;
+        e_prev = r->dyn_e_end = e_now;
+    }
+    drape_free(ring);
+    r->dyn_end = t;
+    if (r->dyn_steps == 0) r->dyn_dt_min = 0.0;
+    return rc;
+}
