@@ -47,6 +47,8 @@ static const qcase good[] = {
     {"1/30s", &DRAPE_DIM_TIME, 1.0 / 30.0},
     {"3/4", &DRAPE_DIM_NONE, 0.75},
     {"20 ms", &DRAPE_DIM_TIME, 0.02},
+    {"100 us", &DRAPE_DIM_TIME, 1e-4},
+    {"100 \xC2\xB5s", &DRAPE_DIM_TIME, 1e-4},                  /* µs */
     {"2 min", &DRAPE_DIM_TIME, 120.0},
     {"1.5 h", &DRAPE_DIM_TIME, 5400.0},
     {"0.02 N.s/m", &DRAPE_DIM_DAMPING, 0.02},

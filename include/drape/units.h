@@ -6,7 +6,7 @@
  * decimals) optionally followed by a unit, with or without a space.  A unit
  * is a product of factors joined by '.', '*' or '/', each a symbol with an
  * optional integer power "^n"; a leading "1/" is allowed ("1/s", "1/cm").
- * Symbols: m cm mm um km; s ms min h; kg g mg; N mN gf kgf; rad deg; and the
+ * Symbols: m cm mm um km; s ms us min h; kg g mg; N mN gf kgf; rad deg; and the
  * dimensionless "1".  A bare number is taken as SI.
  *
  * Every quantity is converted to SI once, at load time, and checked against
