@@ -254,8 +254,6 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         h = h_next;
         t += hs;
         r->dyn_steps++;
-        if (hs < r->dyn_dt_min) r->dyn_dt_min = hs;
-        if (hs > r->dyn_dt_max) r->dyn_dt_max = hs;
         /* the energy balance of every step (the long step's guard below
          * uses it too) */
         double e_now = total_energy(w, x, v);
@@ -306,6 +304,9 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             for (int k = 0; k < nwin; k++)
                 if (ring[k] > ke_win && ring_t[k] > t - tw * (1.0 - 1e-9)) ke_win = ring[k];
         }
+        /* the step stands (a refused one above did not count) */
+        if (hs < r->dyn_dt_min) r->dyn_dt_min = hs;
+        if (hs > r->dyn_dt_max) r->dyn_dt_max = hs;
         double rise = e_now - e_prev;
         if (!isnan(rise) && !(rise <= r->dyn_e_max_rise)) r->dyn_e_max_rise = rise;
         e_prev = r->dyn_e_end = e_now;
