@@ -20,7 +20,7 @@
  * half the step (BDF1 restart).  The model dissipates; a rise is the
  * linearly implicit step's, which at long steps pumped energy into folds
  * and kept the cloth swinging (measured on the Cusick scene at 1 cm and
- * 100 um: rises of 1e-2 of the dissipated energy in one step, the fall run
+ * 100 um: rises of 2 % of the dissipated energy in one step, the fall run
  * to its longest; with 1e-2 here they go on, with 1e-3 and 1e-4 they
  * stop; docs/ensemble.md). */
 #define DRAPE_EQ_FALL_RISE 1e-4
