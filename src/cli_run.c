@@ -564,16 +564,22 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         double step = drape_scene_animate_step(&s, NULL, &nsub);
         drape_cli_result_num(&r, "step_s", animate ? step : NAN);
         drape_cli_result_int(&r, "substeps", animate ? nsub : NAN);
+        /* the energy balance: a dynamic run's over its output points, the
+         * fall's over its steps */
         int bal = !method_static && rc.n_energy > 0;
-        /* the fall: the balance of its dynamics, over every step */
-        int fall = method == DRAPE_METHOD_FALL && sim_ok;
-        drape_cli_result_num(&r, "energy_total_start_J",
-                             bal ? rc.e_start : fall ? er.dyn_e_start : NAN);
-        drape_cli_result_num(&r, "energy_total_end_J",
-                             bal ? rc.e_end : fall ? er.dyn_e_end : NAN);
-        drape_cli_result_num(&r, "energy_max_rise_J",
-                             bal && rc.n_energy > 1 ? rc.e_max_rise
-                             : fall ? er.dyn_e_max_rise : NAN);
+        double e_start = NAN, e_end = NAN, e_rise = NAN;
+        if (bal) {
+            e_start = rc.e_start;
+            e_end = rc.e_end;
+            if (rc.n_energy > 1) e_rise = rc.e_max_rise;
+        } else if (method == DRAPE_METHOD_FALL && sim_ok) {
+            e_start = er.dyn_e_start;
+            e_end = er.dyn_e_end;
+            e_rise = er.dyn_e_max_rise;
+        }
+        drape_cli_result_num(&r, "energy_total_start_J", e_start);
+        drape_cli_result_num(&r, "energy_total_end_J", e_end);
+        drape_cli_result_num(&r, "energy_max_rise_J", e_rise);
         drape_cli_result_num(&r, "max_strain_peak", bal ? rc.strain_peak : NAN);
         drape_cli_result_int(&r, "energy_rescales", animate ? res.stats.energy_rescales : NAN);
     }
