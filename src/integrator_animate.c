@@ -69,7 +69,7 @@
 #define ANIM_SHIFT_MAX 1e4
 
 #define PARTS_CONS (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY)
-#define PARTS_DAMP (DRAPE_PART_AIR | DRAPE_PART_EDGE)
+#define PARTS_DAMP DRAPE_PARTS_DAMPING
 
 typedef struct anim {
     drape_ode *ode;
@@ -161,8 +161,8 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
         !s->vn || !s->vt || !s->g || !s->dv || !s->dpos || !s->vlast)
         goto nomem;
     drape_model_diagonal_slots(ode->model, s->dpos);
-    s->have_d = (ode->parts & (DRAPE_PART_AIR | DRAPE_PART_EDGE)) != 0;
-    s->d_const = (ode->parts & DRAPE_PART_EDGE) == 0;
+    s->have_d = (ode->parts & PARTS_DAMP) != 0;
+    s->d_const = (ode->parts & (DRAPE_PART_EDGE | DRAPE_PART_SHEAR_DAMPING)) == 0;
     s->schur = drape_schur_new(P, ode->inv_mass, err);
     if (!s->schur) {
         anim_free(s);

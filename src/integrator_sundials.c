@@ -86,7 +86,8 @@ typedef enum sun_kind { SK_CVODE, SK_IMEX, SK_DIRK, SK_ERK } sun_kind;
 #define ARK_IMPLICIT_PREDICTOR 1
 
 /* Parts in the implicit partition of arkode-imex (numerics.md 3.4). */
-#define IMEX_IMPLICIT_PARTS (DRAPE_PART_STRETCH | DRAPE_PART_EDGE | DRAPE_PART_SHEAR)
+#define IMEX_IMPLICIT_PARTS \
+    (DRAPE_PART_STRETCH | DRAPE_PART_EDGE | DRAPE_PART_SHEAR | DRAPE_PART_SHEAR_DAMPING)
 
 /* arkode-imex: Newton's stopping test, as a fraction of the local error
  * test (ARKStepSetNonlinConvCoef; SUNDIALS' default is 0.1). */
@@ -874,7 +875,7 @@ static void *sun_alloc(sun_kind kind, const char *name, drape_ode *ode,
 
     if (kind != SK_ERK) {
         s->jparts = kind == SK_IMEX ? s->parts_i : ode->parts;
-        s->have_d = (s->jparts & (DRAPE_PART_AIR | DRAPE_PART_EDGE)) != 0;
+        s->have_d = (s->jparts & DRAPE_PARTS_DAMPING) != 0;
         s->linsol = o->linsol;
         if (s->linsol == DRAPE_LINSOL_AUTO)
             s->linsol = ode->nf3 >= DRAPE_LINSOL_SCHUR_MIN_NF3 ? DRAPE_LINSOL_SCHUR_DIRECT

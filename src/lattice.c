@@ -582,7 +582,7 @@ static int build_elements(drape_lattice *L, const geom *g,
 {
     int want_edges = (s->terms & DRAPE_TERM_STRETCH) || s->damping_edge > 0.0;
     int want_hinges = (s->terms & DRAPE_TERM_BEND) != 0;
-    int want_corners = (s->terms & DRAPE_TERM_SHEAR) != 0;
+    int want_corners = (s->terms & DRAPE_TERM_SHEAR) || s->damping_shear > 0.0;
     int ne = 0, nh = 0, nc = 0, nq = 0;
     /* direction d: DRAPE_WEFT steps i, DRAPE_WARP steps j */
     static const int step[2][2] = {{1, 0}, {0, 1}};

@@ -17,6 +17,9 @@
  * Dissipation (MODEL 3.6):
  *   air drag       f_i = -c_air m_i v_i
  *   edge dashpot   f_b = -c_edge ((v_b - v_a).e) e, f_a = -f_b, e = unit(x_b - x_a)
+ *   shear damping  f = -beta q F'(0) (dgamma/dt) grad gamma per corner
+ *                  (not in MODEL.md: an optional scene dissipation, off
+ *                  unless damping.shear is set; docs/model.md)
  *
  * Forces are the exact negative gradient.  K = df/dx and D = df/dv are
  * exact, including the x-dependence of the dashpot direction e
@@ -394,6 +397,51 @@ static int kern_shear(const drape_model *m, const drape_corner *cn,
     return 0;
 }
 
+/* Shear damping of a corner (docs/model.md, "Shear damping"): the
+ * dissipation function R = 1/2 kd (dgamma/dt)^2 with kd = beta q G0,
+ * q = w sigma^2 / 4, G0 = F'(0) the initial slope of the fabric's mean
+ * shear curve (the flat fabric's shear rigidity; clamped at 0), beta =
+ * o.beta_shear: Rayleigh damping proportional to the flat state's shear
+ * stiffness, constant per corner, so that it is smooth in x (a tangent
+ * F'(gamma) would make K jump where F'' does, at gamma = 0 and at the
+ * fit's knots).  With g = grad gamma (9 local coordinates, mid, warp,
+ * weft), H = hess gamma and s = g . v:
+ *     f = -kd s g,  D = df/dv = -kd g g^T,  K = df/dx = -kd (g (H v)^T + s H),
+ * f . v = -kd s^2 <= 0.  gamma = pi/2 - alpha is the angle function
+ * g(alpha) with g' = -1 and g'' = 0 (r = -1/sin, p = cos/sin), whose force
+ * and df/dx angle_local gives as -g and -H.  v NULL means zero
+ * velocities. */
+static int kern_shear_damp(const drape_model *m, const drape_corner *cn, const int *ref,
+                           const int *ids, const double *v, double *fl, double Jl[9][9],
+                           double Dl[9][9])
+{
+    angle_geo G;
+    double g[9], H[9][9], Hv[9] = {0.0}, s = 0.0;
+    if (angle_geo_set(m, ref[0], ref[1], Jl ? GEO_HESS : 0u, &G)) return 1;
+    if (G.s < MODEL_SIN_TINY) return 1;
+    double kd = m->o.beta_shear * m->shear_g0 * cn->weight * m->L->sigma * m->L->sigma / 4.0;
+    angle_local(&G, CORNER_CA, CORNER_CB, -1.0 / G.sn, G.cn / G.sn, g, Jl ? H : NULL);
+    for (int a = 0; a < 9; a++) {
+        g[a] = -g[a];
+        if (v) s += g[a] * v[3 * ids[a / 3] + a % 3];
+    }
+    for (int a = 0; a < 9; a++) fl[a] = -kd * s * g[a];
+    if (Dl)
+        for (int a = 0; a < 9; a++)
+            for (int b = 0; b < 9; b++) Dl[a][b] = -kd * (g[a] * g[b]);
+    if (Jl) {
+        for (int a = 0; a < 9; a++)
+            for (int b = 0; b < 9; b++) {
+                H[a][b] = -H[a][b];
+                if (v) Hv[a] += H[a][b] * v[3 * ids[b / 3] + b % 3];
+            }
+        for (int a = 0; a < 9; a++)
+            for (int b = 0; b < 9; b++)
+                Jl[a][b] = -kd * (g[a] * Hv[b] + s * H[a][b]);
+    }
+    return 0;
+}
+
 /* Twist cell (issue 18; docs/model.md, "Bias bending").  With the cell's
  * corners P0 = (i, j), P1 = (i+1, j), P2 = (i+1, j+1), P3 = (i, j+1):
  *     a  = P0 - P1 + P2 - P3   (its non-planarity: sigma^2 x_xy for a
@@ -660,6 +708,20 @@ static int eval(drape_model *m, unsigned parts, const double *x,
             if (K) add_blocks(m, m->cslot + 9 * (int64_t)c, ids, 3, Jl, K);
         }
     }
+    if (!rc && (parts & DRAPE_PART_SHEAR_DAMPING)) {
+        for (int c = 0; c < L->n_corners; c++) {
+            const drape_corner *C = &L->corners[c];
+            ids[0] = C->mid; ids[1] = C->warp; ids[2] = C->weft;
+            if (kern_shear_damp(m, C, m->cref + 2 * (int64_t)c, ids, v, fl, K ? Jl : NULL,
+                                D ? Dl : NULL)) {
+                rc = 1;
+                break;
+            }
+            if (f) add_forces(f, ids, 3, fl);
+            if (K) add_blocks(m, m->cslot + 9 * (int64_t)c, ids, 3, Jl, K);
+            if (D) add_blocks(m, m->cslot + 9 * (int64_t)c, ids, 3, Dl, D);
+        }
+    }
     if (!rc && f && (parts & DRAPE_PART_GRAVITY)) {
         for (int i = 0; i < L->n; i++) f[3 * i + 2] -= L->mass[i] * m->o.g;
     }
@@ -697,6 +759,7 @@ void drape_model_opts_from_scene(const drape_scene *s, drape_model_opts *o)
     o->form = s->energy_form;
     o->c_air = s->damping_air;
     o->c_edge = s->damping_edge;
+    o->beta_shear = s->damping_shear;
     o->g = DRAPE_G_STANDARD;
 }
 

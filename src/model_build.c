@@ -202,18 +202,19 @@ static void corner_ids(const drape_lattice *L, int c, int *ids)
 }
 
 /* First-order pattern: x columns [diag; N + K rows], v columns
- * [identity; N + D rows] with D rows = edge blocks + diagonal blocks when
- * edge dashpots are built, else the diagonal alone. */
+ * [identity; N + D rows] with D rows = the blocks of the edge dashpots and
+ * of the shear-damped corners + diagonal blocks when either is built, else
+ * the diagonal alone. */
 static int build_first_order(drape_model *m, const int64_t *dcol, const int *drow)
 {
     const drape_pattern *P = &m->pat;
     drape_pattern *J = &m->pat1;
     int64_t N = m->N, nnz = 0, k = 0;
-    int edge = dcol != NULL;
+    int blocks = dcol != NULL; /* D has off-diagonal blocks */
 
     for (int64_t j = 0; j < N; j++) {
         nnz += 1 + (P->colptr[j + 1] - P->colptr[j]);
-        nnz += 1 + (edge ? 3 * (dcol[j / 3 + 1] - dcol[j / 3]) : 1);
+        nnz += 1 + (blocks ? 3 * (dcol[j / 3 + 1] - dcol[j / 3]) : 1);
     }
     J->n = 2 * N;
     J->nnz = nnz;
@@ -236,7 +237,7 @@ static int build_first_order(drape_model *m, const int64_t *dcol, const int *dro
         J->colptr[N + j] = k;
         m->jid[j] = k;
         J->rowind[k++] = j;
-        if (edge) {
+        if (blocks) {
             int q = (int)(j / 3);
             for (int64_t t = dcol[q]; t < dcol[q + 1]; t++)
                 for (int r = 0; r < 3; r++) J->rowind[k++] = N + 3 * (int64_t)drow[t] + r;
@@ -397,11 +398,13 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
                         "drape_model_new: inconsistent lattice (ids, sigma or masses)");
         return NULL;
     }
-    if (!(o->c_air >= 0.0) || !(o->c_edge >= 0.0) || !isfinite(o->c_air) ||
-        !isfinite(o->c_edge) || !isfinite(o->g)) {
+    if (!(o->c_air >= 0.0) || !(o->c_edge >= 0.0) || !(o->beta_shear >= 0.0) ||
+        !isfinite(o->c_air) || !isfinite(o->c_edge) || !isfinite(o->beta_shear) ||
+        !isfinite(o->g)) {
         drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, NULL,
-                        "damping and gravity must be finite and >= 0 (c_air %g, c_edge %g, g %g)",
-                        o->c_air, o->c_edge, o->g);
+                        "damping and gravity must be finite and >= 0 (c_air %g, c_edge %g, "
+                        "beta_shear %g, g %g)",
+                        o->c_air, o->c_edge, o->beta_shear, o->g);
         return NULL;
     }
     m = drape_calloc(1, sizeof *m);
@@ -413,12 +416,16 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
                            DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY);
     if (o->c_air > 0.0) m->parts |= DRAPE_PART_AIR;
     if (o->c_edge > 0.0) m->parts |= DRAPE_PART_EDGE;
+    /* shear damping acts on the lattice's shear corners (built when the
+     * scene has the shear term or sets damping.shear) */
+    if (o->beta_shear > 0.0 && L->n_corners > 0) m->parts |= DRAPE_PART_SHEAR_DAMPING;
+    m->shear_g0 = fmax(drape_fit_slope(&m->F.shear_mean, 0.0), 0.0);
     m->nf = L->n_free;
     m->N = 3 * (int64_t)L->n_free;
 
     int use_edges = (m->parts & (DRAPE_PART_STRETCH | DRAPE_PART_EDGE)) != 0;
     int use_hinges = (m->parts & DRAPE_PART_BEND) != 0;
-    int use_corners = (m->parts & DRAPE_PART_SHEAR) != 0;
+    int use_corners = (m->parts & (DRAPE_PART_SHEAR | DRAPE_PART_SHEAR_DAMPING)) != 0;
     /* twist cells belong to bending (issue 18) */
     int use_cells = use_hinges && L->n_cells > 0 && m->F.has_bias;
     m->use_cells = use_cells;
@@ -457,8 +464,10 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
         if (!m->qslot) goto nomem;
     }
     if (build_segments(m, use_edges, use_hinges, use_corners)) goto nomem;
-    if (m->parts & DRAPE_PART_EDGE) {
-        if (build_blocks(L, 1, 0, 0, 0, &dcol, &drow)) goto nomem;
+    if (m->parts & (DRAPE_PART_EDGE | DRAPE_PART_SHEAR_DAMPING)) {
+        if (build_blocks(L, (m->parts & DRAPE_PART_EDGE) != 0, 0,
+                         (m->parts & DRAPE_PART_SHEAR_DAMPING) != 0, 0, &dcol, &drow))
+            goto nomem;
     }
     if (build_first_order(m, dcol, drow)) goto nomem;
     goto out;

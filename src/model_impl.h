@@ -16,14 +16,15 @@
 #define MODEL_SERIES_PSI 1e-3
 
 #define PARTS_CONSERVATIVE (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR)
-#define PARTS_DISSIPATIVE (DRAPE_PART_AIR | DRAPE_PART_EDGE)
-#define PARTS_SEGMENTS (PARTS_CONSERVATIVE | DRAPE_PART_EDGE)
+#define PARTS_DISSIPATIVE DRAPE_PARTS_DAMPING
+#define PARTS_SEGMENTS (PARTS_CONSERVATIVE | DRAPE_PART_EDGE | DRAPE_PART_SHEAR_DAMPING)
 
 struct drape_model {
     const drape_lattice *L;
     drape_fabric F;
     drape_model_opts o;
     unsigned parts;
+    double shear_g0;   /* max(F'(0), 0) of the mean shear curve, N/m/rad (shear damping) */
     int nf;            /* free particles */
     int64_t N;         /* 3 nf */
     drape_pattern pat; /* K, D */

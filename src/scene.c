@@ -437,7 +437,7 @@ static int parse_model(const drape_yread *c, const drape_ynode *root, drape_scen
 
 static int parse_damping(const drape_yread *c, const drape_ynode *root, drape_scene *s)
 {
-    static const char *const keys[] = {"air", "edge", NULL};
+    static const char *const keys[] = {"air", "edge", "shear", NULL};
     const drape_ynode *m = drape_ynode_get(root, "damping", NULL);
     if (!m) return 0;
     if (drape_yread_want_map(c, m, "damping") ||
@@ -446,7 +446,10 @@ static int parse_damping(const drape_yread *c, const drape_ynode *root, drape_sc
                                  DRAPE_YREAD_NONNEGATIVE, &s->damping_air, NULL) ||
         drape_yread_opt_quantity(c, m, "damping", "edge", DRAPE_DIM_DAMPING,
                                  "damping coefficient (N.s/m)", DRAPE_YREAD_NONNEGATIVE,
-                                 &s->damping_edge, NULL))
+                                 &s->damping_edge, NULL) ||
+        drape_yread_opt_quantity(c, m, "damping", "shear", DRAPE_DIM_TIME,
+                                 "time (s)",
+                                 DRAPE_YREAD_NONNEGATIVE, &s->damping_shear, NULL))
         return -1;
     return 0;
 }

@@ -96,7 +96,7 @@ static drape_lattice *lattice(const drape_scene *s, const drape_fabric *F)
 
 static drape_model *model(const drape_lattice *L, const drape_fabric *F, unsigned terms)
 {
-    drape_model_opts o = {terms, DRAPE_FORM_CONSISTENT, 0.0, 0.0, DRAPE_G_STANDARD};
+    drape_model_opts o = {terms, DRAPE_FORM_CONSISTENT, 0.0, 0.0, DRAPE_G_STANDARD, 0.0};
     drape_error err;
     drape_error_clear(&err);
     drape_model *m = drape_model_new(L, F, &o, &err);

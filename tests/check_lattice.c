@@ -629,6 +629,12 @@ START_TEST(test_terms_select_elements)
     ck_assert_int_eq(L->n_hinges, 0);
     ck_assert_int_eq(L->n_corners, 400);
     drape_lattice_free(L);
+    s.terms = DRAPE_TERM_BEND | DRAPE_TERM_GRAVITY;
+    s.damping_shear = 5e-4; /* shear damping needs the corners */
+    L = build(&s);
+    ck_assert_int_eq(L->n_edges, 0);
+    ck_assert_int_eq(L->n_corners, 400);
+    drape_lattice_free(L);
 }
 END_TEST
 

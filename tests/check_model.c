@@ -309,6 +309,7 @@ static drape_model *tm_new(const drape_lattice *L, unsigned terms,
     drape_error err;
     make_fabric(&F);
     drape_error_clear(&err);
+    memset(&o, 0, sizeof o);
     o.terms = terms;
     o.form = form;
     o.c_air = c_air;
@@ -737,7 +738,8 @@ START_TEST(test_pattern)
     ck_assert_int_eq(Js->nnz, Ps->nnz + 9 * nf);
     ck_assert_uint_eq(drape_model_parts(ms), DRAPE_PART_STRETCH | DRAPE_PART_GRAVITY);
     ck_assert_uint_eq(drape_model_parts(ma), CONS_G | DRAPE_PART_AIR);
-    ck_assert_uint_eq(drape_model_parts(me), DRAPE_PART_ALL);
+    /* all but shear damping (damping.shear not set) */
+    ck_assert_uint_eq(drape_model_parts(me), DRAPE_PART_ALL & ~DRAPE_PART_SHEAR_DAMPING);
     ck_assert_ptr_eq(drape_model_lattice(ma), L);
     /* the diagonal slots: in column j, at row j, for both patterns */
     long slots[3 * 30];
@@ -1245,7 +1247,7 @@ START_TEST(test_omega_cotton)
 {
     drape_lattice *L = tl_grid(30, 30, 0.01, NULL, 0);
     drape_fabric F;
-    drape_model_opts o = {DRAPE_TERM_ALL, DRAPE_FORM_CONSISTENT, 0, 0, 9.80665};
+    drape_model_opts o = {DRAPE_TERM_ALL, DRAPE_FORM_CONSISTENT, 0, 0, 9.80665, 0};
     drape_error err;
     make_fabric(&F);
     F.k[0] = F.k[1] = 10000.0;
@@ -1278,7 +1280,7 @@ START_TEST(test_alloc)
     static const int fix[2] = {0, 4};
     drape_lattice *L = tl_grid(5, 5, SIG, fix, 2);
     drape_fabric F;
-    drape_model_opts o = {DRAPE_TERM_ALL, DRAPE_FORM_CONSISTENT, 1.0, 0.1, 9.80665};
+    drape_model_opts o = {DRAPE_TERM_ALL, DRAPE_FORM_CONSISTENT, 1.0, 0.1, 9.80665, 0};
     drape_error err;
     make_fabric(&F);
     /* walk every allocation failure of drape_model_new */
@@ -1431,6 +1433,7 @@ START_TEST(test_scenes)
             o.form = (drape_energy_form)form;
             o.c_air = 1.0;
             o.c_edge = 0.05;
+            o.beta_shear = 1e-3; /* shear damping (built on the scene's corners) */
             drape_model *m = drape_model_new(L, &F, &o, &err);
             ck_assert_msg(m != NULL, "%s", err.msg);
             const drape_pattern *P = drape_model_pattern(m);
@@ -1493,7 +1496,7 @@ START_TEST(test_scenes)
          * (hang only: on a table the lattice leaves out the clamped
          * elements, which store a constant) */
         if (S.kind == DRAPE_SCENE_HANG) {
-            drape_model_opts o = {DRAPE_TERM_STRETCH, DRAPE_FORM_CONSISTENT, 0, 0, 9.80665};
+            drape_model_opts o = {DRAPE_TERM_STRETCH, DRAPE_FORM_CONSISTENT, 0, 0, 9.80665, 0};
             drape_model *m = drape_model_new(L, &F, &o, &err);
             drape_energies E;
             for (int i = 0; i < n3; i++) y[i] = L->x0[i] * (i % 3 == 0 ? 1.01 : 1.0);
@@ -1512,6 +1515,158 @@ START_TEST(test_scenes)
 }
 END_TEST
 
+/* Shear angle of corner C at x, computed here from its particles:
+ * sin gamma = cos alpha = ah . bh (a = x_warp - x_mid, b = x_weft - x_mid). */
+static double corner_gamma(const drape_corner *C, const double *x)
+{
+    double a[3], b[3], la = 0, lb = 0, d = 0;
+    for (int k = 0; k < 3; k++) {
+        a[k] = x[3 * C->warp + k] - x[3 * C->mid + k];
+        b[k] = x[3 * C->weft + k] - x[3 * C->mid + k];
+        la += a[k] * a[k];
+        lb += b[k] * b[k];
+        d += a[k] * b[k];
+    }
+    return asin(d / sqrt(la * lb));
+}
+
+/* Shear damping (docs/model.md, "Shear damping") on the Cusick scene's
+ * lattice (cotton, 3 cm) at a perturbed state, with only its part
+ * evaluated:
+ * - its power f . v equals -sum_c beta q G0 (dgamma_c/dt)^2, with
+ *   q = w sigma^2 / 4, G0 the slope of cotton's mean shear curve at 0
+ *   (from its fabric file's coefficients) and dgamma/dt by differences of the corners' angles
+ *   computed here along x + t v;
+ * - rigid motions (a translation, a rotation) feel no force;
+ * - D u and K u against differences of the forces in v and in x;
+ * - the first-order Jacobian carries M^-1 D u in its velocity columns;
+ * - the model without damping.shear has no such part. */
+START_TEST(test_shear_damping)
+{
+    drape_scene S;
+    drape_fabric F;
+    drape_error err;
+    drape_error_clear(&err);
+    ck_assert_msg(drape_scene_load(tu_src("scenes/cusick.yaml"), &S, &err, NULL, NULL) == 0,
+                  "%s", err.msg);
+    ck_assert_msg(drape_fabric_load(S.fabric_path, &F, &err, NULL, NULL) == 0, "%s", err.msg);
+    S.spacing = 0.03;
+    S.damping_shear = 2e-3;
+    drape_lattice *L = drape_lattice_new(&S, &F, &err);
+    ck_assert_msg(L != NULL, "%s", err.msg);
+    drape_model_opts o;
+    drape_model_opts_from_scene(&S, &o);
+    ck_assert(o.beta_shear == 2e-3);
+    drape_model *m = drape_model_new(L, &F, &o, &err);
+    ck_assert_msg(m != NULL, "%s", err.msg);
+    ck_assert(drape_model_parts(m) & DRAPE_PART_SHEAR_DAMPING);
+    const unsigned SD = DRAPE_PART_SHEAR_DAMPING;
+    int n3 = 3 * L->n;
+    double sg = L->sigma;
+    const drape_pattern *P = drape_model_pattern(m);
+    int64_t N = P->n;
+    double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
+    double *y = malloc(sizeof(double) * n3), *f = malloc(sizeof(double) * n3);
+    double *K = malloc(sizeof(double) * P->nnz), *D = malloc(sizeof(double) * P->nnz);
+    double *uf = malloc(sizeof(double) * N), *Ku = malloc(sizeof(double) * N);
+    double *fk[4];
+    for (int k = 0; k < 4; k++) fk[k] = malloc(sizeof(double) * n3);
+    uint64_t rs = 77;
+    for (int i = 0; i < n3; i++) {
+        int fr = !L->fixed[i / 3];
+        x[i] = L->xinit[i] + (fr ? 0.2 * sg * urand(&rs) : 0.0);
+        v[i] = fr ? 0.05 * urand(&rs) : 0.0;
+    }
+    /* power */
+    ck_assert_int_eq(drape_model_forces(m, SD, x, v, f), 0);
+    double pw = 0, pe = 0, pa = 0, st[4] = {2, 1, -1, -2};
+    /* G0: the mean of warp's and weft's first linear coefficients, gf/cm
+     * per rad -> N/m per rad */
+    double g0 = 0.5 * (420.54446 + 412.96917) * 0.980665;
+    ck_assert_msg(fabs(drape_fit_slope(&F.shear_mean, 0.0) - g0) < 1e-12 * g0,
+                  "cotton's mean shear curve at 0: %g", drape_fit_slope(&F.shear_mean, 0.0));
+    for (int i = 0; i < n3; i++) pw += f[i] * v[i];
+    for (int c = 0; c < L->n_corners; c++) {
+        const drape_corner *C = &L->corners[c];
+        double gk[4], th = 1e-4;
+        for (int k = 0; k < 4; k++) {
+            for (int i = 0; i < n3; i++) y[i] = x[i] + st[k] * th * v[i];
+            gk[k] = corner_gamma(C, y);
+        }
+        double gd = (8.0 * (gk[1] - gk[2]) - (gk[0] - gk[3])) / (12.0 * th);
+        double kd = o.beta_shear * C->weight * sg * sg / 4.0 * g0;
+        pe -= kd * gd * gd;
+        pa += kd * gd * gd;
+    }
+    ck_assert_msg(pa > 0 && pw < 0, "power %g, expected %g", pw, pe);
+    ck_assert_msg(fabs(pw - pe) < 1e-7 * pa, "power %g, expected %g", pw, pe);
+    /* rigid motions: translation, rotation about an axis through the centre */
+    double wv[3] = {0.3, -0.2, 0.5}, tv[3] = {0.01, 0.02, -0.03};
+    for (int r = 0; r < 2; r++) {
+        double fs = 0;
+        for (int p = 0; p < L->n; p++) {
+            double w_x[3];
+            w_x[0] = wv[1] * x[3 * p + 2] - wv[2] * x[3 * p + 1];
+            w_x[1] = wv[2] * x[3 * p] - wv[0] * x[3 * p + 2];
+            w_x[2] = wv[0] * x[3 * p + 1] - wv[1] * x[3 * p];
+            for (int k = 0; k < 3; k++) y[3 * p + k] = r ? w_x[k] : tv[k];
+        }
+        ck_assert_int_eq(drape_model_forces(m, SD, x, y, f), 0);
+        for (int i = 0; i < n3; i++) fs = fmax(fs, fabs(f[i]));
+        ck_assert_msg(fs < 1e-9 * sqrt(pa), "rigid motion %d: force %g", r, fs);
+    }
+    /* D u, K u */
+    ck_assert_int_eq(drape_model_jacobian(m, SD, x, v, K, D), 0);
+    for (int q = 0; q < L->n_free; q++)
+        for (int k = 0; k < 3; k++) uf[3 * q + k] = urand(&rs);
+    for (int wvel = 0; wvel < 2; wvel++) {
+        double hh = wvel ? 1e-3 : 1e-6 * sg;
+        for (int k = 0; k < 4; k++) {
+            memcpy(y, wvel ? v : x, sizeof(double) * n3);
+            for (int q = 0; q < L->n_free; q++)
+                for (int c = 0; c < 3; c++)
+                    y[3 * L->free_to_id[q] + c] += st[k] * hh * uf[3 * q + c];
+            ck_assert_int_eq(drape_model_forces(m, SD, wvel ? x : y, wvel ? y : v, fk[k]), 0);
+        }
+        csc_mul(P, wvel ? D : K, uf, Ku);
+        double num = 0, den = 0;
+        for (int64_t r = 0; r < N; r++) {
+            int gi = 3 * L->free_to_id[r / 3] + (int)(r % 3);
+            double fd = (8.0 * (fk[1][gi] - fk[2][gi]) - (fk[0][gi] - fk[3][gi])) / (12.0 * hh);
+            num = fmax(num, fabs(fd - Ku[r]));
+            den = fmax(den, fabs(fd));
+        }
+        ck_assert_msg(den > 0 && ratio(num, den) < TOL_FD, "%s u rel err %g",
+                      wvel ? "D" : "K", ratio(num, den));
+    }
+    /* first-order Jacobian: rows N.. of J [0; u] are M^-1 D u */
+    const drape_pattern *P1 = drape_model_pattern_first_order(m);
+    double *J = malloc(sizeof(double) * P1->nnz), *z = calloc(2 * (size_t)N, sizeof(double));
+    double *Jz = malloc(sizeof(double) * 2 * (size_t)N);
+    ck_assert_int_eq(drape_model_jacobian_first_order(m, SD, 1, x, v, J), 0);
+    memcpy(z + N, uf, sizeof(double) * (size_t)N);
+    csc_mul(P1, J, z, Jz);
+    csc_mul(P, D, uf, Ku);
+    double num = 0, den = 0;
+    for (int64_t r = 0; r < N; r++) {
+        double mr = L->mass[L->free_to_id[r / 3]];
+        num = fmax(num, fabs(Jz[N + r] * mr - Ku[r]));
+        den = fmax(den, fabs(Ku[r]));
+    }
+    ck_assert_msg(den > 0 && num <= 1e-12 * den, "first-order D: %g of %g", num, den);
+    free(J); free(z); free(Jz);
+    drape_model_free(m);
+    /* off unless set */
+    o.beta_shear = 0.0;
+    m = drape_model_new(L, &F, &o, &err);
+    ck_assert(m && !(drape_model_parts(m) & DRAPE_PART_SHEAR_DAMPING));
+    drape_model_free(m);
+    free(x); free(v); free(y); free(f); free(K); free(D); free(uf); free(Ku);
+    for (int k = 0; k < 4; k++) free(fk[k]);
+    drape_lattice_free(L);
+}
+END_TEST
+
 Suite *model_suite(void); /* found by the runner */
 Suite *model_suite(void)
 {
@@ -1527,6 +1682,7 @@ Suite *model_suite(void)
     TCase *ts = tcase_create("scenes");
     tcase_set_timeout(ts, 120);
     tcase_add_test(ts, test_scenes);
+    tcase_add_test(ts, test_shear_damping);
     suite_add_tcase(s, ts);
     TCase *tp = tcase_create("physics");
     tcase_set_timeout(tp, 120);

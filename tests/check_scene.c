@@ -258,7 +258,7 @@ START_TEST(test_defaults)
     ck_assert_int_eq(s.has_perturbation, 0);
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_CONSISTENT);
     ck_assert_uint_eq(s.terms, 31u); /* all five, bias included (issue 18) */
-    ck_assert(s.damping_air == 0.0 && s.damping_edge == 0.0);
+    ck_assert(s.damping_air == 0.0 && s.damping_edge == 0.0 && s.damping_shear == 0.0);
     ck_assert_str_eq(s.integrator, "auto");
     ck_assert_close_rel(s.rtol, 1e-4, 1e-12);
     ck_assert_close_rel(s.atol, 1e-7, 1e-12);
@@ -332,7 +332,7 @@ START_TEST(test_options)
         "spacing: 5 mm\n"
         "perturbation: {amplitude: 0 m}\n"
         "model: {energy_form: seed, terms: [gravity, bend]}\n"
-        "damping: {edge: 1 N.s/m}\n"
+        "damping: {edge: 1 N.s/m, shear: 0.5 ms}\n"
         "solver: {integrator: gsl-msbdf, max_order: 3, rtol: 1/1000}\n"
         "end: {t_max: 1 min, equilibrium: {speed: 1 mm/s, window: 500 ms}}\n"
         "output: {hdf5: false, frames: {every: 1/25 s, obj: false}}\n",
@@ -349,6 +349,7 @@ START_TEST(test_options)
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_SEED);
     ck_assert_uint_eq(s.terms, DRAPE_TERM_GRAVITY | DRAPE_TERM_BEND);
     ck_assert_close_rel(s.damping_edge, 1.0, 1e-12);
+    ck_assert_close_rel(s.damping_shear, 5e-4, 1e-12); /* 0.5 ms */
     ck_assert_str_eq(s.integrator, "gsl-msbdf");
     ck_assert_int_eq(s.max_order, 3);
     ck_assert_close_rel(s.rtol, 1e-3, 1e-12);
@@ -604,6 +605,9 @@ START_TEST(test_bad_units)
                  DRAPE_E_INPUT, 4, 17, "damping.edge",
                  "expected a damping coefficient");
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "damping: {shear: 2 1/s}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 18, "damping.shear", "expected a time");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "end: {equilibrium: {speed: 1 mm}, t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 28, "end.equilibrium.speed",
                  "expected a speed");
@@ -678,6 +682,9 @@ START_TEST(test_bad_ranges)
                  "damping: {air: 0 1/s, edge: -0.1 N.s/m}\n"
                  "end: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 29, "damping.edge", "non-negative");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "damping: {shear: -1 ms}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 18, "damping.shear", "non-negative");
     /* seeds */
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "perturbation: {amplitude: 1 mm, seed: -1}\n"

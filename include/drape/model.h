@@ -4,6 +4,9 @@
  *   E_pot = E_stretch + E_bend + E_shear + E_gravity       (MODEL 3, seed 18)
  *   m_i dv_i/dt = -dE_pot/dx_i + f_diss,i,  dx_i/dt = v_i  (MODEL 4, seed 16-17)
  *   f_air  = -c_air m v,  f_edge = -c_edge ((v_b - v_a).e) e  (MODEL 3.6)
+ *   f_shear_damping = -beta_shear q G0 (dgamma/dt) grad gamma per shear corner
+ *                     (q its area / 4, G0 the flat fabric's shear rigidity) (docs/model.md, "Shear damping"; not in MODEL.md:
+ *                     an optional scene dissipation, off unless set)
  *
  * Force "parts" are selected by a bit mask so an IMEX integrator can put
  * some in its implicit and some in its explicit partition; parts that the
@@ -40,8 +43,13 @@ enum {
     DRAPE_PART_GRAVITY = 1u << 3,
     DRAPE_PART_AIR = 1u << 4,  /* air drag */
     DRAPE_PART_EDGE = 1u << 5, /* edge dashpots */
-    DRAPE_PART_ALL = 0x3fu
+    DRAPE_PART_SHEAR_DAMPING = 1u << 6, /* shear-rate damping of the corners */
+    DRAPE_PART_ALL = 0x7fu
 };
+
+/* The dissipative parts: those whose force depends on the velocities (the
+ * damping matrix D = df/dv is nonzero). */
+#define DRAPE_PARTS_DAMPING (DRAPE_PART_AIR | DRAPE_PART_EDGE | DRAPE_PART_SHEAR_DAMPING)
 
 typedef struct drape_model_opts {
     unsigned terms;               /* DRAPE_TERM_* mask of energy terms to build */
@@ -49,6 +57,11 @@ typedef struct drape_model_opts {
     double c_air;                 /* 1/s, 0 = off */
     double c_edge;                /* N.s/m, 0 = off */
     double g;                     /* m/s^2, along -z (DRAPE_G_STANDARD) */
+    double beta_shear;            /* s, 0 = off: shear damping, a viscous
+                                     shear force per length beta_shear G0
+                                     dgamma/dt, G0 the initial slope of the
+                                     shear curve (last, so that positional
+                                     initialisers leave it 0) */
 } drape_model_opts;
 
 /* Options from a scene (terms, form, damping, standard gravity). */

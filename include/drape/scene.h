@@ -113,6 +113,7 @@ typedef struct drape_scene {
 
     double damping_air;            /* 1/s, 0 = off */
     double damping_edge;           /* N.s/m, 0 = off */
+    double damping_shear;          /* s, 0 = off: shear damping (docs/model.md) */
 
     char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* default "auto" */
     double rtol, atol;             /* defaults 1e-4, 1e-7 */
