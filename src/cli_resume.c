@@ -93,6 +93,7 @@ int drape_cli_resume_load(const char *dir, resume_info *ri, drape_error *err)
     ri->below_since = ck_num(c, "eq_below_since_s");
     ri->fixed_step = ck_num(c, "step_s"); /* added (issue 16) */
     ri->terms = ck_num(c, "terms");       /* added (issue 18) */
+    ri->damping_shear = ck_num(c, "damping_shear_s"); /* added (thirteenth session) */
     double ms = ck_num(c, "max_steps"), fr = ck_num(c, "frames"), h5 = ck_num(c, "hdf5");
     ri->ref.valid = ck_num(c, "energy_ref_valid") == 1.0;
     ri->ref.energy_J = ck_num(c, "energy_ref_J");
@@ -183,4 +184,5 @@ void drape_cli_run_kv_fill(run_kv *k, const char *scene_path, const drape_scene 
     kv_num(k, "signal", signal);
     kv_num(k, "step_s", so->fixed_step); /* animate's step (issue 16) */
     kv_num(k, "terms", (double)s->terms); /* the terms run, --terms included (issue 18) */
+    kv_num(k, "damping_shear_s", s->damping_shear); /* --damping-shear included */
 }

@@ -24,6 +24,8 @@ typedef struct resume_info {
     double fixed_step;  /* animate's step, s; NaN when not stored (older files) */
     double terms;       /* the DRAPE_TERM_* mask run (--terms); NaN when not
                            stored (older files: the scene's) */
+    double damping_shear; /* s, the shear damping run (--damping-shear); NaN
+                             when not stored (older files: the scene's) */
     long max_steps;
     int max_order;   /* 0: the scene's (files written before --max-order) */
     int frames;      /* frames written before (OBJ and HDF5 numbering) */

@@ -69,7 +69,9 @@ const char *const drape_cli_run_keys[] = {
     /* ninth session: when the fall ended (it goes on while the cloth swings) */
     "fall_end_s",
     /* eleventh session: the fall's error control (--fall-tol), and its steps */
-    "fall_tol_m", "fall_steps", NULL};
+    "fall_tol_m", "fall_steps",
+    /* thirteenth session: the shear damping (damping.shear, --damping-shear) */
+    "damping_shear_s", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -345,6 +347,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
     if (ra->fall_swing >= 0) s.fall_swing = ra->fall_swing;
     if (ra->fall_tol >= 0) s.fall_tol = ra->fall_tol;
+    if (ra->damping_shear >= 0) s.damping_shear = ra->damping_shear;
+    if (ri && ri->damping_shear >= 0) s.damping_shear = ri->damping_shear; /* what ran */
     if (ra->substeps > 0) s.substeps = ra->substeps;
     if (ra->terms) s.terms = ra->terms;
     if (ri && ri->terms >= 1.0 && ri->terms <= (double)DRAPE_TERM_ALL) /* what ran */
@@ -595,6 +599,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_cli_result_num(&r, "fall_tol_m",
                          method == DRAPE_METHOD_FALL && s.fall_tol > 0.0 ? s.fall_tol : NAN);
     drape_cli_result_int(&r, "fall_steps", method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_steps : NAN);
+    drape_cli_result_num(&r, "damping_shear_s", s.damping_shear);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

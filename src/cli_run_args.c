@@ -112,6 +112,13 @@ static const char run_usage[] =
     "                           (docs/ensemble.md) (scene: solver.fall_tol;\n"
     "                           default 0 = the fixed step); result key\n"
     "                           fall_tol_m\n"
+    "  --damping-shear T        shear damping (scene: damping.shear; default 0 =\n"
+    "                           off): a viscous shear force per length T x G0 x\n"
+    "                           the shear rate, G0 the flat fabric's shear\n"
+    "                           rigidity; damps the in-plane shear vibrations\n"
+    "                           that MODEL.md's air drag and edge dashpots leave\n"
+    "                           undamped. Not in MODEL.md (docs/model.md, \"Shear\n"
+    "                           damping\"); result key damping_shear_s\n"
     "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
     "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
     "  --seed N                 perturbation seed (of the first specimen)\n"
@@ -182,7 +189,7 @@ int drape_cli_run(int argc, char **argv)
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
            O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
-           O_TERMS, O_FALLSWING, O_FALLTOL };
+           O_TERMS, O_FALLSWING, O_FALLTOL, O_DAMPSHEAR };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -204,6 +211,7 @@ int drape_cli_run(int argc, char **argv)
         {"terms", required_argument, NULL, O_TERMS},
         {"fall-swing", required_argument, NULL, O_FALLSWING},
         {"fall-tol", required_argument, NULL, O_FALLTOL},
+        {"damping-shear", required_argument, NULL, O_DAMPSHEAR},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"substeps", required_argument, NULL, O_SUBSTEPS},
@@ -222,6 +230,7 @@ int drape_cli_run(int argc, char **argv)
     memset(&ra, 0, sizeof ra);
     ra.fall_swing = -1.0;
     ra.fall_tol = -1.0;
+    ra.damping_shear = -1.0;
     ra.jobs = 0; /* one per core */
     while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
         switch (c) {
@@ -304,6 +313,12 @@ int drape_cli_run(int argc, char **argv)
             if (parse_quantity("--fall-tol", optarg, DRAPE_DIM_LENGTH, &ra.fall_tol)) return 2;
             if (!(ra.fall_tol >= 0))
                 return usage_error("--fall-tol: must not be negative, got %s%s", optarg, "");
+            break;
+        case O_DAMPSHEAR:
+            if (parse_quantity("--damping-shear", optarg, DRAPE_DIM_TIME, &ra.damping_shear))
+                return 2;
+            if (!(ra.damping_shear >= 0) || !isfinite(ra.damping_shear))
+                return usage_error("--damping-shear: must be a time >= 0, got %s%s", optarg, "");
             break;
         case O_FALLTIME:
         case O_FALLSTEP: {
