@@ -89,8 +89,10 @@ static const char *shape_name(drape_shape s)
     return "?";
 }
 
-/* Per-term highest natural frequency at the initial state. */
-static void print_bounds(drape_model *m, const drape_lattice *L)
+/* Per-term highest natural frequency at the initial state; with shear
+ * damping beta (s) > 0, the damping ratio beta omega / 2 it gives the
+ * fastest shear vibration. */
+static void print_bounds(drape_model *m, const drape_lattice *L, double beta)
 {
     static const struct { unsigned part; const char *name; } parts[] = {
         {DRAPE_PART_STRETCH, "stretch"},
@@ -110,6 +112,9 @@ static void print_bounds(drape_model *m, const drape_lattice *L)
         }
         printf("    %-8s           %.4g  (explicit RK4 step limit ~ %.3g s)\n",
                parts[i].name, w, w > 0 ? 2.8 / w : INFINITY);
+        if (parts[i].part == DRAPE_PART_SHEAR && beta > 0.0)
+            printf("    shear damping      %.3g of critical at that frequency (beta omega / 2)\n",
+                   0.5 * beta * w);
     }
 }
 
@@ -154,13 +159,15 @@ static int check_scene(const char *path)
     printf("  spacing_m            %.6g\n", s.spacing);
     printf("  energy_form          %s\n", drape_energy_form_name(s.energy_form));
     printf("  integrator           %s, rtol %.3g, atol %.3g\n", s.integrator, s.rtol, s.atol);
+    printf("  damping              air %.3g 1/s, edge %.3g N.s/m, shear %.3g s\n", s.damping_air,
+           s.damping_edge, s.damping_shear);
     printf("  particles            %d (free %d, fixed %d)\n", L->n, L->n_free, L->n - L->n_free);
     printf("  elements             %d edges, %d hinges, %d corners\n", L->n_edges,
            L->n_hinges, L->n_corners);
     double wa = f.weight * L->area_nominal;
     printf("  mass_kg              %.6g (W x area %.6g kg, difference %+.3g %%)\n",
            L->mass_total, wa, 100.0 * (L->mass_total - wa) / wa);
-    print_bounds(m, L);
+    print_bounds(m, L, s.damping_shear);
     print_fabric(&f);
     goto out;
 fail:

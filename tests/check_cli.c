@@ -4,6 +4,7 @@
  * corpus (tests/bad) rejected with FILE:LINE:COL and a non-zero status;
  * the data directories (src/cli_data.h, issue 17). */
 #include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -102,6 +103,38 @@ START_TEST(test_shipped_files_valid)
 }
 END_TEST
 
+/* `drape check` reports a scene's damping, and with shear damping the
+ * damping ratio beta omega / 2 at the shear term's frequency bound that it
+ * prints on the line above (thirteenth session). */
+START_TEST(test_check_damping)
+{
+    char scene[8192], fabric[4096], cwd[2048];
+    ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
+    snprintf(fabric, sizeof fabric, "%s/%s", cwd, tu_src("fabrics/cotton-breen.yaml"));
+    snprintf(scene, sizeof scene,
+             "scene: cusick\nfabric: %s\nspecimen: {shape: circle, diameter: 30 cm}\n"
+             "support: {diameter: 18 cm}\nspacing: 3 cm\n"
+             "damping: {air: 2 1/s, shear: 0.5 ms}\nend: {t_max: 1 s}\n",
+             fabric);
+    char args[4200];
+    snprintf(args, sizeof args, "check '%s'", tu_write_file("damped.yaml", scene));
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_msg(strstr(out, "damping              air 2 1/s, edge 0 N.s/m, shear 0.0005 s"),
+                  "%s", out);
+    const char *sh = strstr(out, "    shear    "), *sd = strstr(out, "    shear damping ");
+    ck_assert_msg(sh && sd && sd > sh, "%s", out);
+    double w = strtod(sh + 13, NULL), ratio = strtod(sd + 18, NULL);
+    ck_assert_msg(w > 0 && fabs(ratio - 0.5 * 5e-4 * w) <= 1e-2 * ratio, "omega %g, ratio %g", w,
+                  ratio);
+    /* without it: no damping ratio line */
+    snprintf(scene, sizeof scene,
+             "scene: cusick\nfabric: %s\nspacing: 3 cm\nend: {t_max: 1 s}\n", fabric);
+    snprintf(args, sizeof args, "check '%s'", tu_write_file("undamped.yaml", scene));
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_msg(strstr(out, "shear 0 s") && !strstr(out, "shear damping"), "%s", out);
+}
+END_TEST
+
 /* The shared examples are the input contract: accepted unchanged, and the
  * copies in fabrics/ and scenes/ are identical to them, but for the
  * optional `specimens:` line the shipped Cusick and table scenes add
@@ -187,6 +220,7 @@ Suite *cli_suite(void)
     tcase_add_test(tc, test_usage_errors);
     tcase_add_test(tc, test_data_dirs);
     tcase_add_test(tc, test_shipped_files_valid);
+    tcase_add_test(tc, test_check_damping);
     tcase_add_test(tc, test_shared_examples);
     tcase_add_test(tc, test_bad_corpus);
     suite_add_tcase(s, tc);
