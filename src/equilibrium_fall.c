@@ -60,8 +60,9 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  *     b = (1 + r) / (1 + 2 r),
  * one Newton iteration from v = v_n (x0 = xh + b h v_n):
  *     (M - b h D - (b h)^2 K) dv = M (vh - v_n) + b h f(x0, v_n),
- * K, D at (x0, v_n).  Runs for time o->dyn_time (it follows the physical
- * fall, with inertia, into the basin that the dynamic run would reach),
+ * K (the conservative forces' df/dx) and D (the dampers' df/dv) at
+ * (x0, v_n).  Runs for time o->dyn_time (it follows the physical fall,
+ * with inertia, into the basin that the dynamic run would reach),
  * then, with o->dyn_ke_frac > 0, on while the cloth swings (up to T_max)
  * at the step o->dyn_dt_swing (0 = dyn_dt), from a BDF1 step.
  *
@@ -74,8 +75,9 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  * this one (1/4 to 2 times, within [dyn_dt / 64, 8 dyn_dt]).  Positions,
  * not velocities: the stretch vibrations that the fall excites are large
  * in velocity but small in position (a strain of 1e-4 is a micrometre at
- * 1 cm), and are damped by the step, not followed.  Its matrix is the
- * exact one (no compression clamp), and a step whose total energy rises by
+ * 1 cm), and are damped by the step, not followed.  Its matrix keeps the
+ * conservative forces' whole Jacobian (no compression clamp), and a step
+ * whose total energy rises by
  * more than DRAPE_EQ_FALL_RISE of the energy dissipated so far is redone
  * at half the step: the position estimate does not see a step that pumps
  * energy into a fold.  Every step's total energy is recorded (r->dyn_e_*).
@@ -174,8 +176,17 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         }
         r->force_evals++;
         r->jacobian_evals++;
+        /* the matrix: K of the conservative parts and D of the dampers,
+         * without the dampers' own dK (their x-dependence: edge dashpots'
+         * direction, shear damping's angle gradient), which is not
+         * symmetric (docs/model.md) while CHOLMOD reads the lower triangle
+         * only; as in animate.  With it, the lower triangle mirrored made
+         * the linearly implicit step unstable on the table scene at 1 cm
+         * with shear damping (seed 22: a rise of the total energy by 144 J,
+         * 16,400 steps; 2e-7 J and 500 steps without it; docs/ensemble.md) */
         if (drape_model_forces(w->m, parts_all, x0, v, w->fd) != 0 ||
-            drape_model_jacobian(w->m, parts_all, x0, v, w->K, w->D) != 0) {
+            drape_model_jacobian(w->m, parts_all & ~DRAPE_PARTS_DAMPING, x0, v, w->K, NULL) != 0 ||
+            drape_model_jacobian(w->m, parts_all & DRAPE_PARTS_DAMPING, x0, v, NULL, w->D) != 0) {
             if (h < 1e-6 * T) { rc = 1; break; }
             h *= 0.5;
             have_prev = 0;
@@ -183,13 +194,13 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         }
         /* the fixed step's matrix drops the compressed springs' negative
          * stiffness (E8), to stay positive definite at long steps; the
-         * error-controlled step keeps the exact Jacobian: with the clamp
+         * error-controlled step keeps the whole K: with the clamp
          * its linearly implicit step, a W-method where springs are
          * compressed, pumped energy into folds (measured on the Cusick
          * scene at 1 cm: the total energy rose by 25 % of the fall's peak
          * kinetic energy and the cloth never stopped swinging), and its
-         * steps are short enough for the exact matrix (a matrix that is
-         * not positive definite halves the step) */
+         * steps are short enough for the unclamped matrix (a matrix that
+         * is not positive definite halves the step) */
         const double *Kc = NULL;
         if (w->Kc && !adaptive) {
             drape_model_compression_clamp(w->m, x0, w->kclamp, w->Kc);
