@@ -69,7 +69,6 @@
 #define ANIM_SHIFT_MAX 1e4
 
 #define PARTS_CONS (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY)
-#define PARTS_DAMP DRAPE_PARTS_DAMPING
 
 typedef struct anim {
     drape_ode *ode;
@@ -161,7 +160,7 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
         !s->vn || !s->vt || !s->g || !s->dv || !s->dpos || !s->vlast)
         goto nomem;
     drape_model_diagonal_slots(ode->model, s->dpos);
-    s->have_d = (ode->parts & PARTS_DAMP) != 0;
+    s->have_d = (ode->parts & DRAPE_PARTS_DAMPING) != 0;
     s->d_const = (ode->parts & (DRAPE_PART_EDGE | DRAPE_PART_SHEAR_DAMPING)) == 0;
     s->schur = drape_schur_new(P, ode->inv_mass, err);
     if (!s->schur) {
@@ -372,7 +371,8 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
     if (s->have_d && !(s->d_const && s->d_valid)) {
         scatter_xv(s, xn, s->vn, 0.0);
         o->n_jac++;
-        if (drape_model_jacobian(o->model, o->parts & PARTS_DAMP, o->x, o->v, s->Kd, s->D) != 0)
+        if (drape_model_jacobian(o->model, o->parts & DRAPE_PARTS_DAMPING, o->x, o->v, s->Kd,
+                                 s->D) != 0)
             return 1;
         s->d_valid = 1;
     }

@@ -847,7 +847,7 @@ int drape_model_jacobian_first_order(drape_model *m, unsigned parts,
                                      const double *v, double *J)
 {
     const drape_pattern *P = &m->pat;
-    int want_d = (parts & m->parts & PARTS_DISSIPATIVE) != 0;
+    int want_d = (parts & m->parts & DRAPE_PARTS_DAMPING) != 0;
     int rc = eval(m, parts, x, v, NULL, m->Kw, want_d ? m->Dw : NULL);
     memset(J, 0, sizeof(double) * (size_t)m->pat1.nnz);
     if (rc) return rc;
