@@ -88,7 +88,7 @@ deps:
 	else echo "all Debian packages present"; fi
 
 $(O)/libdrape.a: $(LIB_OBJ)
-	$(AR) rcs $@ $(LIB_OBJ)
+	rm -f $@ && $(AR) rcs $@ $(LIB_OBJ)
 
 drape: $(CLI_OBJ) $(O)/libdrape.a
 	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $(CLI_OBJ) $(O)/libdrape.a $(DRAPE_LIBS)
