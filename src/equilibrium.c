@@ -60,7 +60,8 @@
  * CHOLMOD: the model's CSC pattern (full, both triangles, diagonal stored)
  * is given to cholmod_l with stype = -1, so only the lower triangle is
  * read; cholmod_l_analyze once (fill-reducing ordering; simplicial up to
- * DRAPE_EQ_SIMPLICIAL_MAX_N unknowns, else CHOLMOD's choice),
+ * DRAPE_EQ_SIMPLICIAL_MAX_N unknowns, else supernodal with coarse
+ * amalgamation),
  * cholmod_l_factorize (numeric only) per iteration, cholmod_l_solve2 with
  * its workspaces kept.  Nothing else is allocated inside the loop.
  *
@@ -99,10 +100,24 @@
 /* (E6): inverse iteration stops when rho changes by less than this. */
 #define DRAPE_EQ_EIG_RTOL 1e-8
 
-/* Unknowns up to which CHOLMOD factorises simplicially (measured: equal
- * speed at 1368 unknowns, supernodal 1.6-2x faster at 5400-7000 on one
- * thread). */
-#define DRAPE_EQ_SIMPLICIAL_MAX_N 3000
+/* Unknowns up to which CHOLMOD factorises simplicially; above, supernodal
+ * with coarser amalgamation than CHOLMOD's default (nrelax 4, 16, 48,
+ * zrelax 0.8, 0.1, 0.05): each supernode costs a BLAS call and an OpenMP
+ * region, and libgomp ends every region with a futex call even in one
+ * thread (main.c, limit_openmp).  Measured with OMP_THREAD_LIMIT=1 (drape
+ * run --specimens 1, seed 1, least CPU of 3; docs/performance.md, "The
+ * fall's factorisation"): simplicial / default supernodal / these
+ * settings, Cusick 2 cm (324 unknowns) 0.27 / 0.44 / 0.36 s, 1.5 cm (612)
+ * 0.50 / - / 0.48 s, 1 cm (1368) 1.52 / 1.51 / 1.15 s, table 2 cm (1800)
+ * 2.63 / 2.30 / 1.67 s, Cusick 0.75 cm (2448) 5.72 / 4.56 / 3.34 s; at
+ * 0.5 cm (8100) 16.0 against 12.9 ms per factorisation.  (Before the
+ * thread limit, supernodal had been slower at 1368: docs/ensemble.md.) */
+#define DRAPE_EQ_SIMPLICIAL_MAX_N 600
+#define DRAPE_EQ_NRELAX_0 8
+#define DRAPE_EQ_NRELAX_1 32
+#define DRAPE_EQ_NRELAX_2 128
+#define DRAPE_EQ_ZRELAX_1 0.5
+#define DRAPE_EQ_ZRELAX_2 0.2
 #define PARTS_POT (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | \
                    DRAPE_PART_GRAVITY)
 
@@ -394,7 +409,16 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
     /* small systems: simplicial, which uses neither BLAS nor OpenMP (the
      * supernodal kernels of Debian's CHOLMOD start 4 OpenMP threads
      * whatever OMP_NUM_THREADS says, which costs more than it gains here) */
-    if (w->N <= DRAPE_EQ_SIMPLICIAL_MAX_N) w->c.supernodal = CHOLMOD_SIMPLICIAL;
+    if (w->N <= DRAPE_EQ_SIMPLICIAL_MAX_N) {
+        w->c.supernodal = CHOLMOD_SIMPLICIAL;
+    } else {
+        w->c.supernodal = CHOLMOD_SUPERNODAL;
+        w->c.nrelax[0] = DRAPE_EQ_NRELAX_0;
+        w->c.nrelax[1] = DRAPE_EQ_NRELAX_1;
+        w->c.nrelax[2] = DRAPE_EQ_NRELAX_2;
+        w->c.zrelax[1] = DRAPE_EQ_ZRELAX_1;
+        w->c.zrelax[2] = DRAPE_EQ_ZRELAX_2;
+    }
     w->A = cholmod_l_allocate_sparse((size_t)w->N, (size_t)w->N, nnz, 1, 1, -1,
                                      CHOLMOD_REAL, &w->c);
     w->B = cholmod_l_allocate_dense((size_t)w->N, 1, (size_t)w->N, CHOLMOD_REAL, &w->c);
