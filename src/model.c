@@ -842,6 +842,12 @@ int drape_model_jacobian(drape_model *m, unsigned parts, const double *x,
     return eval(m, parts, x, v, NULL, K, D);
 }
 
+int drape_model_eval(drape_model *m, unsigned parts, const double *x,
+                     const double *v, double *f, double *K, double *D)
+{
+    return eval(m, parts, x, v, f, K, D);
+}
+
 int drape_model_jacobian_first_order(drape_model *m, unsigned parts,
                                      int include_kinematic, const double *x,
                                      const double *v, double *J)

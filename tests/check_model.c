@@ -922,6 +922,51 @@ START_TEST(test_orientation)
 }
 END_TEST
 
+/* drape_model_eval computes f, K and D in one pass: each must be what the
+ * separate calls give, bit for bit; and the fall's split (the conservative
+ * parts' f and K, the dampers' f and D, forces summed) must give the whole
+ * force to rounding. */
+START_TEST(test_eval_fused)
+{
+    static const int fix[2] = {0, 4};
+    drape_lattice *L = tl_grid(5, 5, SIG, fix, 2);
+    int n3 = 3 * L->n;
+    double *x = perturbed(L, 0.2 * SIG, 4243);
+    double *v = perturbed(L, 0.05, 78);
+    for (int i = 0; i < n3; i++) v[i] -= L->x0[i];
+    double *f = malloc(sizeof(double) * n3), *g = malloc(sizeof(double) * n3);
+    double *h = malloc(sizeof(double) * n3);
+    ck_assert(f && g && h);
+    for (int form = 0; form < 2; form++) {
+        drape_model *m = tm_new(L, DRAPE_TERM_ALL, (drape_energy_form)form, 2.0, 0.02);
+        const drape_pattern *P = drape_model_pattern(m);
+        size_t nz = (size_t)P->nnz;
+        double *K1 = malloc(sizeof(double) * nz), *D1 = malloc(sizeof(double) * nz);
+        double *K2 = malloc(sizeof(double) * nz), *D2 = malloc(sizeof(double) * nz);
+        ck_assert(K1 && D1 && K2 && D2);
+        ck_assert_int_eq(drape_model_eval(m, DRAPE_PART_ALL, x, v, f, K1, D1), 0);
+        ck_assert_int_eq(drape_model_forces(m, DRAPE_PART_ALL, x, v, g), 0);
+        ck_assert_int_eq(drape_model_jacobian(m, DRAPE_PART_ALL, x, v, K2, D2), 0);
+        ck_assert(vmax(f, n3) > 0.0 && vmax(K1, (int)nz) > 0.0 && vmax(D1, (int)nz) > 0.0);
+        ck_assert(memcmp(f, g, sizeof(double) * n3) == 0);
+        ck_assert(memcmp(K1, K2, sizeof(double) * nz) == 0);
+        ck_assert(memcmp(D1, D2, sizeof(double) * nz) == 0);
+        unsigned damp = DRAPE_PARTS_DAMPING & drape_model_parts(m);
+        ck_assert(damp != 0u);
+        ck_assert_int_eq(drape_model_eval(m, DRAPE_PART_ALL & ~DRAPE_PARTS_DAMPING, x, v, f, K1,
+                                          NULL), 0);
+        ck_assert_int_eq(drape_model_eval(m, DRAPE_PARTS_DAMPING, x, v, h, NULL, D1), 0);
+        double fs = vmax(g, n3), dF = 0.0;
+        for (int i = 0; i < n3; i++) dF = fmax(dF, fabs(f[i] + h[i] - g[i]));
+        ck_assert_msg(dF <= 1e-13 * fs, "split forces differ by %g of %g", dF, fs);
+        free(K1); free(D1); free(K2); free(D2);
+        drape_model_free(m);
+    }
+    free(x); free(v); free(f); free(g); free(h);
+    tl_free(L);
+}
+END_TEST
+
 /* A hinge of length 1/2 spreads psi over sigma/2 (lattice.h): by hand,
  * E = w sigma^2 Wb(psi / (sigma/2)) (consistent) and
  * E = w sigma^2 M(K) K / 2 with K = 2 psi / (sigma/2) (seed). */
@@ -1688,6 +1733,7 @@ Suite *model_suite(void)
     tcase_set_timeout(tp, 120);
     tcase_add_test(tp, test_invariance);
     tcase_add_test(tp, test_orientation);
+    tcase_add_test(tp, test_eval_fused);
     tcase_add_test(tp, test_hinge_length);
     tcase_add_test(tp, test_uniform_stretch);
     tcase_add_test(tp, test_uniform_bend);

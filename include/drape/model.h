@@ -102,6 +102,14 @@ int drape_model_energy(drape_model *m, const double *x, drape_energies *E);
 int drape_model_forces(drape_model *m, unsigned parts, const double *x,
                        const double *v, double *f);
 
+/* f (3n) and the values of K and D (nnz each) of the selected parts at
+ * (x, v) in one pass over the elements; each output may be NULL
+ * (drape_model_forces and drape_model_jacobian are this with the others
+ * NULL).  Cheaper than the two calls when both are needed: the elements
+ * compute their force and Jacobian together.  Returns 0 or 1. */
+int drape_model_eval(drape_model *m, unsigned parts, const double *x,
+                     const double *v, double *f, double *K, double *D);
+
 /* Pattern of K = df/dx and D = df/dv over free particles (3 n_free square,
  * union of all built parts, diagonal included). */
 const drape_pattern *drape_model_pattern(const drape_model *m);
