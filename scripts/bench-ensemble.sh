@@ -25,7 +25,9 @@
 #   BENCH_REUSE_ACCURATE=1  keep an accurate JSON that exists (the slow part:
 #                 about 50 s of CPU per specimen at 1 cm); its .meta says
 #                 which commit made it
-#   BENCH_SPACINGS  spacings of the study (2cm 1cm 0.75cm 0.5cm; "" = none)
+#   BENCH_SPACINGS  spacings of the study to run (2cm 1cm 0.75cm 0.5cm; "" =
+#                 none); the table shows these and every default spacing
+#                 whose ensemble is there
 #   BENCH_SPACING_SPECIMENS  specimens per spacing (16; at 0.5 cm a specimen
 #                 takes 10-80 s of CPU)
 #   BENCH_TABLES_ONLY=1  only rebuild the tables from the JSON files there
@@ -35,6 +37,16 @@
 #                 and its tables between the markers "ensemble-bench-damped
 #                 VALUE" in docs/performance.md (docs/ensemble.md, "Shear
 #                 damping as a scene option")
+#   BENCH_CALIBRATE  accurate specimens rerun now for each case (2; 0 = none):
+#                 the first seeds of its reference, at -j BENCH_JOBS like the
+#                 fall.  A reference made on another day was timed on a
+#                 machine of another speed (these machines are shared: the
+#                 same accurate specimens took 1.5 times longer on
+#                 2026-11-26 than on 2026-11-24), so the CPU ratio (c) is
+#                 taken in one run: the reference's CPU per specimen times
+#                 the speed factor (these seeds' CPU now / in the
+#                 reference), over the fall's CPU now.  Its DCs must be
+#                 the reference's (the accurate path is deterministic).
 #   DRAPE_BIN     the drape binary (./drape)
 # The accurate ensembles take 1-2 hours of CPU in all; the rest minutes.
 set -eu
@@ -46,8 +58,10 @@ N_FAST=${BENCH_FAST_SPECIMENS:-32}
 JOBS=${BENCH_JOBS:-2}
 CASES=${BENCH_CASES:-"cotton-1cm cotton-poly-1cm jacket-1cm tablecloth-1cm cotton-2cm table-2cm"}
 SPACINGS=${BENCH_SPACINGS-"2cm 1cm 0.75cm 0.5cm"}
+SPACINGS_TABLE=$(for h in 2cm 1cm 0.75cm 0.5cm $SPACINGS; do echo "$h"; done | awk '!seen[$0]++' | tr '\n' ' ')
 REUSE=${BENCH_REUSE_ACCURATE:-0}
 N_SPACING=${BENCH_SPACING_SPECIMENS:-16}
+N_CAL=${BENCH_CALIBRATE:-2}
 DAMP=${BENCH_DAMPING_SHEAR:-}
 DARGS=""
 MARK=ensemble-bench
@@ -107,6 +121,12 @@ for c in $CASES; do
     fi
     # shellcheck disable=SC2086
     run "$c-fall" $a --specimens "$N_FAST" -j "$JOBS"
+    if [ "$N_CAL" -gt 0 ]; then
+        s0=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["specimens"][0]["seed"])' \
+             "$OUT/$c-accurate.json")
+        # shellcheck disable=SC2086
+        run "$c-calib" $a --specimens "$N_CAL" --seed "$s0" -j "$JOBS" --method dynamic --integrator auto
+    fi
     "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" > "$OUT/$c-compare.json"
     # the scene's own integrator (arkode-imex), where its ensemble was made
     # (cotton here; cotton-poly and tablecloth by hand, their .meta says how)
@@ -145,7 +165,7 @@ for h in $SPACINGS_RUN; do
     run "spacing-$h-fall" $(case_args "spacing-$h") --specimens "$N_SPACING" -j "$JOBS"
 done
 
-python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS" "$MARK" "$DAMP" <<'EOF'
+python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS_TABLE" "$MARK" "$DAMP" <<'EOF'
 import json, math, os, re, sys
 out, commit, n_ref, n_fast, spacings, mark, damp = sys.argv[1:8]
 def load(name):
@@ -165,8 +185,28 @@ def fmt(d):
     return "%.4f +- %.4f" % (d["dc"], d["dc_ci95"]) if d.get("dc_ci95") is not None else "%.4f" % d["dc"]
 rows = []
 cases = ["cotton-1cm", "cotton-poly-1cm", "jacket-1cm", "tablecloth-1cm", "cotton-2cm", "table-2cm"]
-lines = ["| case | accurate: n, DC +- 95 %, nodes | CPU s / specimen | fall: n, DC +- 95 %, nodes | CPU s / specimen | p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c) | a b c |",
+def calibration(c):
+    """Speed factor of this run's machine against the reference's: the
+    accurate specimens rerun now (c-calib.json) over the same seeds' CPU in
+    the reference, and whether their DCs are the reference's; (None, None)
+    without a calibration."""
+    cal, ref = load(c + "-calib.json"), load(c + "-accurate.json")
+    if not cal or not ref:
+        return None, None
+    by_seed = {s["seed"]: s for s in ref["specimens"]}
+    now = then = 0.0
+    same = True
+    for s in cal["specimens"]:
+        r = by_seed.get(s["seed"])
+        if r is None or s.get("cpu_s") is None or r.get("cpu_s") is None:
+            return None, None
+        now += s["cpu_s"]
+        then += r["cpu_s"]
+        same = same and s["dc"] is not None and r["dc"] is not None and abs(s["dc"] - r["dc"]) < 1e-6
+    return (now / then if then > 0 else None), same
+lines = ["| case | accurate: n, DC +- 95 %, nodes | CPU s / specimen: as recorded; now | fall: n, DC +- 95 %, nodes | CPU s / specimen | p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c): as recorded; one run | a b c |",
          "|---|---|---|---|---|---|---|---|---|---|"]
+notes = []
 for c in cases:
     cmp = load(c + "-compare.json")
     if not cmp:
@@ -175,17 +215,32 @@ for c in cases:
     a_ok = cmp["p_nodes"] >= 0.05
     b_ok = abs(cmp["dc_diff"]) <= 0.01 and (cmp["dc_in_ci95"] == 1 or r["dc_ci95"] is None
                                             or abs(cmp["dc_diff"]) <= r["dc_ci95"])
-    c_ok = cmp["cpu_ratio"] is not None and cmp["cpu_ratio"] >= 50
-    lines.append("| %s | %d, %s, {%s} | %.1f | %d, %s, {%s} | %.2f | %.3f | %+.4f%s%s | %s | %.0f | %s |" % (
-        c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"],
+    k, same = calibration(c)
+    ratio = cmp["cpu_ratio"]
+    now_ref = ""
+    if k is not None:
+        ratio = r["cpu_per_specimen_s"] * k / o["cpu_per_specimen_s"]
+        now_ref = "; %.1f" % (r["cpu_per_specimen_s"] * k)
+        notes.append("%s %.2f (%d seeds%s)" % (
+            c, k, len(load(c + "-calib.json")["specimens"]),
+            "" if same else ", DCs NOT the reference's"))
+    c_ok = ratio is not None and ratio >= 50
+    lines.append("| %s | %d, %s, {%s} | %.1f%s | %d, %s, {%s} | %.2f | %.3f | %+.4f%s%s | %s | %.0f%s | %s |" % (
+        c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"], now_ref,
         o["n"], fmt(o), hist(o["nodes_hist"]), o["cpu_per_specimen_s"], cmp["p_nodes"],
         cmp["dc_diff"], " +- %.4f" % cmp["dc_diff_ci95"] if cmp.get("dc_diff_ci95") is not None else "",
         "" if cmp["dc_in_ci95"] else " (outside)",
         "%.4f" % cmp["p_dc_dist"] if cmp.get("p_dc_dist") is not None else "", cmp["cpu_ratio"],
+        "; %.0f" % ratio if k is not None else "",
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
+if notes:
+    lines += ["", "CPU in one run: the accurate specimens of each case's first seeds were run again "
+              "with this fall ensemble (`CASE-calib`, at the same `-j`); the speed factor is their "
+              "CPU now over theirs in the reference, and the reference's CPU per specimen times it "
+              "is the \"now\" figure that (c) uses. Speed factors: " + "; ".join(notes) + "."]
 prov = []
 for c in cases:
-    for k in ("accurate", "fall"):
+    for k in ("accurate", "fall", "calib"):
         m = meta("%s-%s" % (c, k))
         if m:
             prov.append("- `%s-%s`: `%s` (drape %s, %s; %s CPU s, %s s wall)" % (
@@ -210,7 +265,7 @@ if imex:
         prov.append("- `cotton-1cm-imex`: `%s` (drape %s, %s)" % (m.get("command", "?"), m.get("commit", "?"), m.get("date", "?")))
 # the fall against the scene's own integrator (arkode-imex, rtol 1e-4: what
 # `--method dynamic` runs), where that ensemble exists
-own = ["| case | imex: n, DC +- 95 %, nodes | CPU s / specimen | imex vs auto: p_nodes, p_mean | fall vs imex: p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c) | a b c |",
+own = ["| case | imex: n, DC +- 95 %, nodes | CPU s / specimen | imex vs auto: p_nodes, p_mean | fall vs imex: p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c), as recorded | a b c |",
        "|---|---|---|---|---|---|---|---|---|"]
 for c in cases:
     fc, ac = load(c + "-imex-fall-compare.json"), load(c + "-imex-compare.json")
@@ -255,7 +310,8 @@ text = ["<!-- %s begin: written by scripts/bench-ensemble.sh; do not edit -->" %
         "method, %s specimens. (a) exact test of the node histograms p >= 0.05; (b) mean DC "
         "within 0.01 and inside the accurate 95 %% interval (the DC diff column adds the 95 %% "
         "half-width of the difference itself, Welch: the uncertainty of both means); (c) at "
-        "least 50 times less CPU per specimen." % (
+        "least 50 times less CPU per specimen, judged on the ratio measured in one run where "
+        "there is one (the accurate specimens of the first seeds timed again with the fall)." % (
             " BENCH_DAMPING_SHEAR=" + damp if damp else "", commit,
             ("Every run with `--damping-shear %s`, a shear damping that MODEL.md does not have "
              "(docs/ensemble.md, \"Shear damping as a scene option\"). " % damp) if damp else "",
