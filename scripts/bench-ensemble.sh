@@ -47,6 +47,8 @@
 #                 the speed factor (these seeds' CPU now / in the
 #                 reference), over the fall's CPU now.  Its DCs must be
 #                 the reference's (the accurate path is deterministic).
+#                 The same for the scene's own integrator where its
+#                 ensemble exists (CASE-imex-calib).
 #   DRAPE_BIN     the drape binary (./drape)
 # The accurate ensembles take 1-2 hours of CPU in all; the rest minutes.
 set -eu
@@ -131,6 +133,12 @@ for c in $CASES; do
     # the scene's own integrator (arkode-imex), where its ensemble was made
     # (cotton here; cotton-poly and tablecloth by hand, their .meta says how)
     if [ -s "$OUT/$c-imex.json" ]; then
+        if [ "$N_CAL" -gt 0 ]; then # its CPU in this run too (the scene's integrator)
+            s0=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["specimens"][0]["seed"])' \
+                 "$OUT/$c-imex.json")
+            # shellcheck disable=SC2086
+            run "$c-imex-calib" $a --specimens "$N_CAL" --seed "$s0" -j "$JOBS" --method dynamic
+        fi
         "$DRAPE" compare "$OUT/$c-imex.json" "$OUT/$c-fall.json" > "$OUT/$c-imex-fall-compare.json"
         "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" > "$OUT/$c-imex-compare.json"
     fi
@@ -185,12 +193,12 @@ def fmt(d):
     return "%.4f +- %.4f" % (d["dc"], d["dc_ci95"]) if d.get("dc_ci95") is not None else "%.4f" % d["dc"]
 rows = []
 cases = ["cotton-1cm", "cotton-poly-1cm", "jacket-1cm", "tablecloth-1cm", "cotton-2cm", "table-2cm"]
-def calibration(c):
+def calibration(c, ref_name="accurate", cal_name="calib"):
     """Speed factor of this run's machine against the reference's: the
     accurate specimens rerun now (c-calib.json) over the same seeds' CPU in
-    the reference, and whether their DCs are the reference's; (None, None)
-    without a calibration."""
-    cal, ref = load(c + "-calib.json"), load(c + "-accurate.json")
+    the reference (c-accurate.json), and whether their DCs are the
+    reference's; (None, None) without a calibration."""
+    cal, ref = load(c + "-" + cal_name + ".json"), load(c + "-" + ref_name + ".json")
     if not cal or not ref:
         return None, None
     by_seed = {s["seed"]: s for s in ref["specimens"]}
@@ -240,7 +248,7 @@ if notes:
               "is the \"now\" figure that (c) uses. Speed factors: " + "; ".join(notes) + "."]
 prov = []
 for c in cases:
-    for k in ("accurate", "fall", "calib"):
+    for k in ("accurate", "fall", "calib", "imex-calib"):
         m = meta("%s-%s" % (c, k))
         if m:
             prov.append("- `%s-%s`: `%s` (drape %s, %s; %s CPU s, %s s wall)" % (
@@ -265,8 +273,9 @@ if imex:
         prov.append("- `cotton-1cm-imex`: `%s` (drape %s, %s)" % (m.get("command", "?"), m.get("commit", "?"), m.get("date", "?")))
 # the fall against the scene's own integrator (arkode-imex, rtol 1e-4: what
 # `--method dynamic` runs), where that ensemble exists
-own = ["| case | imex: n, DC +- 95 %, nodes | CPU s / specimen | imex vs auto: p_nodes, p_mean | fall vs imex: p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c), as recorded | a b c |",
+own = ["| case | imex: n, DC +- 95 %, nodes | CPU s / specimen: as recorded; now | imex vs auto: p_nodes, p_mean | fall vs imex: p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c): as recorded; one run | a b c |",
        "|---|---|---|---|---|---|---|---|---|"]
+own_notes = []
 for c in cases:
     fc, ac = load(c + "-imex-fall-compare.json"), load(c + "-imex-compare.json")
     if not fc:
@@ -274,18 +283,31 @@ for c in cases:
     r = fc["reference"]
     a_ok = fc["p_nodes"] >= 0.05
     b_ok = abs(fc["dc_diff"]) <= 0.01 and (fc["dc_in_ci95"] == 1 or abs(fc["dc_diff"]) <= (r["dc_ci95"] or 0))
-    c_ok = fc["cpu_ratio"] is not None and fc["cpu_ratio"] >= 50
-    own.append("| %s | %d, %s, {%s} | %.1f | %s | %.3f | %+.4f%s | %s | %.0f | %s |" % (
-        c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"],
+    k, same = calibration(c, "imex", "imex-calib")
+    ratio = fc["cpu_ratio"]
+    now_ref = ""
+    if k is not None:
+        ratio = r["cpu_per_specimen_s"] * k / fc["other"]["cpu_per_specimen_s"]
+        now_ref = "; %.1f" % (r["cpu_per_specimen_s"] * k)
+        own_notes.append("%s %.2f (%d seeds%s)" % (
+            c, k, len(load(c + "-imex-calib.json")["specimens"]),
+            "" if same else ", DCs NOT the reference's"))
+    c_ok = ratio is not None and ratio >= 50
+    own.append("| %s | %d, %s, {%s} | %.1f%s | %s | %.3f | %+.4f%s | %s | %.0f%s | %s |" % (
+        c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"], now_ref,
         "%.3f, %.3f" % (ac["p_nodes"], ac["p_mean"]) if ac else "",
         fc["p_nodes"], fc["dc_diff"], "" if fc["dc_in_ci95"] else " (outside)",
         "%.4f" % fc["p_dc_dist"] if fc.get("p_dc_dist") is not None else "", fc["cpu_ratio"],
+        "; %.0f" % ratio if k is not None else "",
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
     m = meta(c + "-imex")
     if m and c != "cotton-1cm":
         prov.append("- `%s-imex`: `%s` (drape %s, %s; %s CPU s, %s s wall)" % (
             c, m.get("command", "?"), m.get("commit", "?"), m.get("date", "?"),
             m.get("cpu_s", "?"), m.get("wall_s", "?")))
+if own_notes:
+    own += ["", "Speed factors of the scene's integrator in this run (its specimens of the first "
+            "seeds timed again, `CASE-imex-calib`): " + "; ".join(own_notes) + "."]
 sp = ["| spacing | particles | n | DC +- 95 % | sd | nodes | dc_mode | CPU s / specimen |", "|---|---|---|---|---|---|---|---|"]
 pts = []
 for h in spacings.split():
