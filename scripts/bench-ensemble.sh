@@ -112,6 +112,15 @@ run() {
         > "$OUT/$name.meta"
 }
 
+# calibrate NAME REFERENCE ARGS...: the first N_CAL seeds of REFERENCE (a
+# result JSON) run again now with ARGS, into OUT/NAME.json (BENCH_CALIBRATE)
+calibrate() {
+    name=$1 ref=$2
+    shift 2
+    s0=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["specimens"][0]["seed"])' "$ref")
+    run "$name" "$@" --specimens "$N_CAL" --seed "$s0" -j "$JOBS"
+}
+
 [ "${BENCH_TABLES_ONLY:-0}" = 1 ] && CASES="" && SPACINGS_RUN="" || SPACINGS_RUN=$SPACINGS
 for c in $CASES; do
     a=$(case_args "$c")
@@ -123,22 +132,16 @@ for c in $CASES; do
     fi
     # shellcheck disable=SC2086
     run "$c-fall" $a --specimens "$N_FAST" -j "$JOBS"
-    if [ "$N_CAL" -gt 0 ]; then
-        s0=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["specimens"][0]["seed"])' \
-             "$OUT/$c-accurate.json")
-        # shellcheck disable=SC2086
-        run "$c-calib" $a --specimens "$N_CAL" --seed "$s0" -j "$JOBS" --method dynamic --integrator auto
-    fi
+    # shellcheck disable=SC2086
+    [ "$N_CAL" -le 0 ] ||
+        calibrate "$c-calib" "$OUT/$c-accurate.json" $a --method dynamic --integrator auto
     "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" > "$OUT/$c-compare.json"
     # the scene's own integrator (arkode-imex), where its ensemble was made
     # (cotton here; cotton-poly and tablecloth by hand, their .meta says how)
     if [ -s "$OUT/$c-imex.json" ]; then
-        if [ "$N_CAL" -gt 0 ]; then # its CPU in this run too (the scene's integrator)
-            s0=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["specimens"][0]["seed"])' \
-                 "$OUT/$c-imex.json")
-            # shellcheck disable=SC2086
-            run "$c-imex-calib" $a --specimens "$N_CAL" --seed "$s0" -j "$JOBS" --method dynamic
-        fi
+        # its CPU in this run too (the scene's integrator)
+        # shellcheck disable=SC2086
+        [ "$N_CAL" -le 0 ] || calibrate "$c-imex-calib" "$OUT/$c-imex.json" $a --method dynamic
         "$DRAPE" compare "$OUT/$c-imex.json" "$OUT/$c-fall.json" > "$OUT/$c-imex-fall-compare.json"
         "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" > "$OUT/$c-imex-compare.json"
     fi
@@ -212,6 +215,19 @@ def calibration(c, ref_name="accurate", cal_name="calib"):
         then += r["cpu_s"]
         same = same and s["dc"] is not None and r["dc"] is not None and abs(s["dc"] - r["dc"]) < 1e-6
     return (now / then if then > 0 else None), same
+def one_run(c, ref, other, recorded, ref_name, cal_name, notes):
+    """(c)'s ratio measured in one run where CASE-cal_name exists (else the
+    recorded one), the "; now" CPU cell, the "; ratio" cell; appends the
+    speed factor to notes."""
+    k, same = calibration(c, ref_name, cal_name)
+    if k is None:
+        return recorded, "", ""
+    now = ref["cpu_per_specimen_s"] * k
+    notes.append("%s %.2f (%d seeds%s)" % (
+        c, k, len(load(c + "-" + cal_name + ".json")["specimens"]),
+        "" if same else ", DCs NOT the reference's"))
+    ratio = now / other["cpu_per_specimen_s"]
+    return ratio, "; %.1f" % now, "; %.0f" % ratio
 lines = ["| case | accurate: n, DC +- 95 %, nodes | CPU s / specimen: as recorded; now | fall: n, DC +- 95 %, nodes | CPU s / specimen | p_nodes (a) | DC diff (b) | p_dc_dist | CPU ratio (c): as recorded; one run | a b c |",
          "|---|---|---|---|---|---|---|---|---|---|"]
 notes = []
@@ -223,15 +239,7 @@ for c in cases:
     a_ok = cmp["p_nodes"] >= 0.05
     b_ok = abs(cmp["dc_diff"]) <= 0.01 and (cmp["dc_in_ci95"] == 1 or r["dc_ci95"] is None
                                             or abs(cmp["dc_diff"]) <= r["dc_ci95"])
-    k, same = calibration(c)
-    ratio = cmp["cpu_ratio"]
-    now_ref = ""
-    if k is not None:
-        ratio = r["cpu_per_specimen_s"] * k / o["cpu_per_specimen_s"]
-        now_ref = "; %.1f" % (r["cpu_per_specimen_s"] * k)
-        notes.append("%s %.2f (%d seeds%s)" % (
-            c, k, len(load(c + "-calib.json")["specimens"]),
-            "" if same else ", DCs NOT the reference's"))
+    ratio, now_ref, ratio_cell = one_run(c, r, o, cmp["cpu_ratio"], "accurate", "calib", notes)
     c_ok = ratio is not None and ratio >= 50
     lines.append("| %s | %d, %s, {%s} | %.1f%s | %d, %s, {%s} | %.2f | %.3f | %+.4f%s%s | %s | %.0f%s | %s |" % (
         c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"], now_ref,
@@ -239,7 +247,7 @@ for c in cases:
         cmp["dc_diff"], " +- %.4f" % cmp["dc_diff_ci95"] if cmp.get("dc_diff_ci95") is not None else "",
         "" if cmp["dc_in_ci95"] else " (outside)",
         "%.4f" % cmp["p_dc_dist"] if cmp.get("p_dc_dist") is not None else "", cmp["cpu_ratio"],
-        "; %.0f" % ratio if k is not None else "",
+        ratio_cell,
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
 if notes:
     lines += ["", "CPU in one run: the accurate specimens of each case's first seeds were run again "
@@ -283,22 +291,15 @@ for c in cases:
     r = fc["reference"]
     a_ok = fc["p_nodes"] >= 0.05
     b_ok = abs(fc["dc_diff"]) <= 0.01 and (fc["dc_in_ci95"] == 1 or abs(fc["dc_diff"]) <= (r["dc_ci95"] or 0))
-    k, same = calibration(c, "imex", "imex-calib")
-    ratio = fc["cpu_ratio"]
-    now_ref = ""
-    if k is not None:
-        ratio = r["cpu_per_specimen_s"] * k / fc["other"]["cpu_per_specimen_s"]
-        now_ref = "; %.1f" % (r["cpu_per_specimen_s"] * k)
-        own_notes.append("%s %.2f (%d seeds%s)" % (
-            c, k, len(load(c + "-imex-calib.json")["specimens"]),
-            "" if same else ", DCs NOT the reference's"))
+    ratio, now_ref, ratio_cell = one_run(c, r, fc["other"], fc["cpu_ratio"], "imex", "imex-calib",
+                                         own_notes)
     c_ok = ratio is not None and ratio >= 50
     own.append("| %s | %d, %s, {%s} | %.1f%s | %s | %.3f | %+.4f%s | %s | %.0f%s | %s |" % (
         c, r["n"], fmt(r), hist(r["nodes_hist"]), r["cpu_per_specimen_s"], now_ref,
         "%.3f, %.3f" % (ac["p_nodes"], ac["p_mean"]) if ac else "",
         fc["p_nodes"], fc["dc_diff"], "" if fc["dc_in_ci95"] else " (outside)",
         "%.4f" % fc["p_dc_dist"] if fc.get("p_dc_dist") is not None else "", fc["cpu_ratio"],
-        "; %.0f" % ratio if k is not None else "",
+        ratio_cell,
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
     m = meta(c + "-imex")
     if m and c != "cotton-1cm":

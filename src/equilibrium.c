@@ -406,9 +406,9 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
     w->c.error_handler = NULL;
     w->c.quick_return_if_not_posdef = 1;
     w->c.final_ll = 1;           /* simplicial: LL^T, which fails when not PD */
-    /* small systems: simplicial, which uses neither BLAS nor OpenMP (the
-     * supernodal kernels of Debian's CHOLMOD start 4 OpenMP threads
-     * whatever OMP_NUM_THREADS says, which costs more than it gains here) */
+    /* small systems: simplicial, which uses neither BLAS nor OpenMP;
+     * larger ones supernodal with few, large supernodes (each opens an
+     * OpenMP region in Debian's CHOLMOD: DRAPE_EQ_SIMPLICIAL_MAX_N) */
     if (w->N <= DRAPE_EQ_SIMPLICIAL_MAX_N) {
         w->c.supernodal = CHOLMOD_SIMPLICIAL;
     } else {
