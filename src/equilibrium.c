@@ -57,13 +57,15 @@
  *      stiffness: measured 234 -> 88 iterations on the Cusick scene.
  * (E9) optional damped dynamics before (E1): the fall, equilibrium_fall.c.
  *
- * CHOLMOD: the model's CSC pattern (full, both triangles, diagonal stored)
- * is given to cholmod_l with stype = -1, so only the lower triangle is
- * read; cholmod_l_analyze once (fill-reducing ordering; simplicial up to
+ * CHOLMOD: the matrices are formed in the model's CSC pattern (full, both
+ * triangles, diagonal stored), of which the lower triangle is read.
+ * cholmod_l_analyze once finds the fill-reducing order (simplicial up to
  * DRAPE_EQ_SIMPLICIAL_MAX_N unknowns, else supernodal with coarse
- * amalgamation),
- * cholmod_l_factorize (numeric only) per iteration, cholmod_l_solve2 with
- * its workspaces kept.  Nothing else is allocated inside the loop.
+ * amalgamation); the triangle CHOLMOD factorises is laid out in that order
+ * once (work_order), so that cholmod_l_factorize (numeric only, per
+ * iteration) need not permute and transpose it; cholmod_l_solve2 with its
+ * workspaces kept.  Nothing is allocated inside the loop but what
+ * CHOLMOD's factorisation allocates itself.
  *
  * References: C. T. Kelley and D. E. Keyes, "Convergence analysis of
  * pseudo-transient continuation", SIAM J. Numer. Anal. 35 (1998) 508-523;
@@ -229,7 +231,7 @@ static double min_pivot(const cholmod_factor *F);
  * CHOLMOD reads). */
 static void assemble(eq_work *w, double lambda, int clamp)
 {
-    double *ax = w->A->x;
+    double *ax = w->ax;
     if (clamp && w->Kc)
         for (long k = 0; k < w->pat->nnz; k++) ax[k] = -w->K[k] - w->Kc[k];
     else
@@ -242,6 +244,10 @@ static void assemble(eq_work *w, double lambda, int clamp)
 int eq_factorize(eq_work *w, drape_error *err)
 {
     w->r->factorizations++;
+    double *apx = w->A->x;
+    const long *src = w->asrc;
+    long anz = ((const long *)w->A->p)[w->N];
+    for (long k = 0; k < anz; k++) apx[k] = w->ax[src[k]];
     int ok = cholmod_l_factorize(w->A, w->LF, &w->c);
     if (w->c.status == CHOLMOD_NOT_POSDEF) return 0;
     if (!ok || w->c.status < CHOLMOD_OK) {
@@ -259,14 +265,16 @@ int eq_factorize(eq_work *w, drape_error *err)
 /* dy = A^-1 rhs (N numbers). */
 int eq_solve(eq_work *w, const double *rhs, double *out, drape_error *err)
 {
-    memcpy(w->B->x, rhs, sizeof(double) * (size_t)w->N);
+    double *b = w->B->x;
+    for (long k = 0; k < w->N; k++) b[k] = rhs[w->perm[k]];
     if (!cholmod_l_solve2(CHOLMOD_A, w->LF, w->B, NULL, &w->X, NULL, &w->Y, &w->E,
                           &w->c)) {
         return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                                "equilibrium: CHOLMOD solve failed (status %d)",
                                w->c.status);
     }
-    memcpy(out, w->X->x, sizeof(double) * (size_t)w->N);
+    const double *xs = w->X->x;
+    for (long k = 0; k < w->N; k++) out[w->perm[k]] = xs[k];
     return 0;
 }
 
@@ -359,6 +367,107 @@ static int lowest_mode(eq_work *w, int iters, double *lam, drape_error *err)
     return 0;
 }
 
+/* The slot of entry (i, j) of the model's symmetric pattern (slot k) or of
+ * its mirror (j, i), whichever is in the lower triangle (i >= j): the
+ * triangle that the matrices are read from, as before CHOLMOD's input was
+ * laid out in its own order (the two agree where the model's matrix is
+ * symmetric to the last bit). */
+static int64_t lower_slot(const drape_pattern *P, int64_t i, int64_t j, int64_t k)
+{
+    if (i >= j) return k;
+    for (int64_t q = P->colptr[i]; q < P->colptr[i + 1]; q++)
+        if (P->rowind[q] == j) return q;
+    return k; /* not reached: the pattern is symmetric */
+}
+
+/* CHOLMOD's order for the model's pattern, and the matrix it factorises.
+ * cholmod_l_factorize transposes a matrix that it must permute (twice for
+ * a lower triangle, supernodal), every call: measured 11 % of the fall's
+ * CPU at 1 cm (perf, docs/performance.md).  So the fill-reducing order is
+ * found once (cholmod_l_analyze of the pattern: AMD and the elimination
+ * tree's postorder), the triangle that CHOLMOD reads without a transpose
+ * (supernodal: lower; simplicial: upper) is laid out in that order, and
+ * it is analysed again in its natural order: the same factor, no
+ * transposes.  w->asrc maps its entries to the model's slots, w->perm its
+ * rows (eq_factorize, eq_solve).  Returns 0, 1 (out of memory) or -1
+ * (err set). */
+static int work_order(eq_work *w, drape_error *err)
+{
+    const drape_pattern *P = w->pat;
+    long N = w->N;
+    size_t nnz = (size_t)P->nnz;
+    int lower = w->c.supernodal != CHOLMOD_SIMPLICIAL;
+    cholmod_sparse *S = cholmod_l_allocate_sparse((size_t)N, (size_t)N, nnz, 1, 1, -1,
+                                                 CHOLMOD_REAL, &w->c);
+    w->perm = drape_malloc(sizeof(long) * (size_t)N);
+    long *pinv = drape_malloc(sizeof(long) * (size_t)N);
+    if (!S || !w->perm || !pinv) goto nomem;
+    long *sp = S->p, *si = S->i;
+    for (long j = 0; j <= N; j++) sp[j] = (long)P->colptr[j];
+    for (int64_t k = 0; k < P->nnz; k++) si[k] = (long)P->rowind[k];
+    memset(S->x, 0, sizeof(double) * nnz); /* the analysis reads the pattern */
+    cholmod_factor *F = cholmod_l_analyze(S, &w->c);
+    cholmod_l_free_sparse(&S, &w->c);
+    if (!F) {
+        drape_free(pinv);
+        if (w->c.status == CHOLMOD_OUT_OF_MEMORY) return 1;
+        return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                               "equilibrium: CHOLMOD analysis failed (status %d)",
+                               w->c.status);
+    }
+    memcpy(w->perm, F->Perm, sizeof(long) * (size_t)N);
+    cholmod_l_free_factor(&F, &w->c);
+    for (long k = 0; k < N; k++) pinv[w->perm[k]] = k;
+    /* the triangle of P ax P^T, column by column (new column J is old
+     * column perm[J]), rows sorted */
+    size_t anz = 0;
+    for (long j = 0; j < N; j++)
+        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++) {
+            long I = pinv[P->rowind[k]], J = pinv[j];
+            if (lower ? I >= J : I <= J) anz++;
+        }
+    w->A = cholmod_l_allocate_sparse((size_t)N, (size_t)N, anz, 1, 1, lower ? -1 : 1,
+                                     CHOLMOD_REAL, &w->c);
+    w->asrc = drape_malloc(sizeof(long) * (anz > 0 ? anz : 1));
+    if (!w->A || !w->asrc) goto nomem;
+    long *ap = w->A->p, *ai = w->A->i, q = 0;
+    for (long J = 0; J < N; J++) {
+        long j = w->perm[J];
+        ap[J] = q;
+        for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++) {
+            long I = pinv[P->rowind[k]];
+            if (!(lower ? I >= J : I <= J)) continue;
+            long t = q++; /* insertion by row */
+            while (t > ap[J] && ai[t - 1] > I) {
+                ai[t] = ai[t - 1];
+                w->asrc[t] = w->asrc[t - 1];
+                t--;
+            }
+            ai[t] = I;
+            w->asrc[t] = (long)lower_slot(P, P->rowind[k], j, k);
+        }
+    }
+    ap[N] = q;
+    memset(w->A->x, 0, sizeof(double) * (anz > 0 ? anz : 1));
+    drape_free(pinv);
+    pinv = NULL;
+    w->c.nmethods = 1;
+    w->c.method[0].ordering = CHOLMOD_NATURAL;
+    w->c.postorder = 0;
+    w->LF = cholmod_l_analyze(w->A, &w->c);
+    if (!w->LF) {
+        if (w->c.status == CHOLMOD_OUT_OF_MEMORY) return 1;
+        return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                               "equilibrium: CHOLMOD analysis failed (status %d)",
+                               w->c.status);
+    }
+    return 0;
+nomem:
+    cholmod_l_free_sparse(&S, &w->c);
+    drape_free(pinv);
+    return 1;
+}
+
 static int work_init(eq_work *w, drape_model *m, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
@@ -372,6 +481,7 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
     size_t n3 = 3 * (size_t)(L->n > 0 ? L->n : 1);
     size_t nnz = (size_t)(w->pat->nnz > 0 ? w->pat->nnz : 1);
     w->K = drape_malloc(sizeof(double) * nnz);
+    w->ax = drape_calloc(nnz, sizeof(double));
     w->dpos = drape_malloc(sizeof(long) * N1);
     w->mrow = drape_malloc(sizeof(double) * N1);
     w->wref = drape_malloc(sizeof(double) * (size_t)(w->nf > 0 ? w->nf : 1));
@@ -388,7 +498,7 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
     w->rch = drape_malloc(sizeof(double) * N1);
     w->v = drape_malloc(sizeof(double) * N1);
     w->u = drape_malloc(sizeof(double) * N1);
-    if (!w->K || !w->dpos || !w->mrow || !w->wref || !w->xt || !w->xz || !w->f || !w->ft || !w->fz ||
+    if (!w->K || !w->ax || !w->dpos || !w->mrow || !w->wref || !w->xt || !w->xz || !w->f || !w->ft || !w->fz ||
         !w->dy || !w->D || !w->vel || !w->fd || !w->rhs || !w->rch || !w->v || !w->u)
         goto nomem;
     for (int p = 0; p < w->nf; p++)
@@ -419,21 +529,12 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
         w->c.zrelax[1] = DRAPE_EQ_ZRELAX_1;
         w->c.zrelax[2] = DRAPE_EQ_ZRELAX_2;
     }
-    w->A = cholmod_l_allocate_sparse((size_t)w->N, (size_t)w->N, nnz, 1, 1, -1,
-                                     CHOLMOD_REAL, &w->c);
     w->B = cholmod_l_allocate_dense((size_t)w->N, 1, (size_t)w->N, CHOLMOD_REAL, &w->c);
-    if (!w->A || !w->B) goto nomem;
-    long *ap = w->A->p, *ai = w->A->i;
-    for (long j = 0; j <= w->N; j++) ap[j] = (long)w->pat->colptr[j];
-    for (int64_t k = 0; k < w->pat->nnz; k++) ai[k] = (long)w->pat->rowind[k];
-    /* values for the analysis are irrelevant; make them finite */
-    memset(w->A->x, 0, sizeof(double) * nnz);
-    w->LF = cholmod_l_analyze(w->A, &w->c);
-    if (!w->LF) {
-        if (w->c.status == CHOLMOD_OUT_OF_MEMORY) goto nomem;
-        return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
-                               "equilibrium: CHOLMOD analysis failed (status %d)",
-                               w->c.status);
+    if (!w->B) goto nomem;
+    int rc = work_order(w, err);
+    if (rc != 0) {
+        if (rc == 1) goto nomem;
+        return -1;
     }
     return 0;
 nomem:
@@ -454,6 +555,9 @@ static void work_free(eq_work *w)
         cholmod_l_finish(&w->c);
     }
     drape_free(w->K);
+    drape_free(w->ax);
+    drape_free(w->perm);
+    drape_free(w->asrc);
     drape_free(w->dpos);
     drape_free(w->mrow);
     drape_free(w->wref);

@@ -211,7 +211,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             drape_model_compression_clamp(w->m, x0, w->kclamp, w->Kc);
             Kc = w->Kc;
         }
-        double *ax = w->A->x;
+        double *ax = w->ax;
         for (int64_t k = 0; k < P->nnz; k++)
             ax[k] = -bh * w->D[k] - bh * bh * (w->K[k] + (Kc ? Kc[k] : 0.0));
         for (long j = 0; j < w->N; j++) ax[w->dpos[j]] += w->mrow[j];

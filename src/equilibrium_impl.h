@@ -32,15 +32,21 @@ typedef struct eq_work {
     double *v, *u;         /* N: inverse iteration */
     double *D, *vel, *fd;  /* damped dynamics: nnz, 3n, 3n */
     double kclamp[2];      /* N/m per direction; 0 = no clamping */
+    double *ax;            /* nnz: the matrix to factorise, in the model's
+                              pattern (both triangles; eq_factorize reads
+                              the lower one) */
     cholmod_common c;
     int c_started;
-    cholmod_sparse *A;
-    cholmod_factor *LF;
+    cholmod_sparse *A;     /* one triangle of P ax P^T, which CHOLMOD
+                              factorises without transposing it */
+    long *perm;            /* N: row k of A is row perm[k] of ax */
+    long *asrc;            /* A's nnz: the slot of ax each entry of A takes */
+    cholmod_factor *LF;    /* of A, in its own (natural) order */
     cholmod_dense *B, *X, *Y, *E;
     drape_equilibrium_result *r;
 } eq_work;
 
-/* Numeric factorisation of w->A.  1: positive definite, 0: not, -1: error
+/* Numeric factorisation of the matrix in w->ax.  1: positive definite, 0: not, -1: error
  * (err set). */
 int eq_factorize(eq_work *w, drape_error *err);
 /* out = A^-1 rhs (N numbers; out may be rhs).  0, or -1 with err set. */
