@@ -59,7 +59,7 @@
  *
  * CHOLMOD: the matrices are formed in the model's CSC pattern (full, both
  * triangles, diagonal stored), of which the lower triangle is read.
- * cholmod_l_analyze once finds the fill-reducing order (simplicial up to
+ * cholmod_l_analyze finds the fill-reducing order once (simplicial up to
  * DRAPE_EQ_SIMPLICIAL_MAX_N unknowns, else supernodal with coarse
  * amalgamation); the triangle CHOLMOD factorises is laid out in that order
  * once (work_order), so that cholmod_l_factorize (numeric only, per
@@ -382,8 +382,8 @@ static int64_t lower_slot(const drape_pattern *P, int64_t i, int64_t j, int64_t 
 
 /* CHOLMOD's order for the model's pattern, and the matrix it factorises.
  * cholmod_l_factorize transposes a matrix that it must permute (twice for
- * a lower triangle, supernodal), every call: measured 11 % of the fall's
- * CPU at 1 cm (perf, docs/performance.md).  So the fill-reducing order is
+ * a lower triangle, supernodal), every call: measured 10.6 % of the CPU
+ * of one default specimen (perf, docs/performance.md).  So the fill-reducing order is
  * found once (cholmod_l_analyze of the pattern: AMD and the elimination
  * tree's postorder), the triangle that CHOLMOD reads without a transpose
  * (supernodal: lower; simplicial: upper) is laid out in that order, and

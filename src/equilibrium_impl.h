@@ -46,8 +46,8 @@ typedef struct eq_work {
     drape_equilibrium_result *r;
 } eq_work;
 
-/* Numeric factorisation of the matrix in w->ax.  1: positive definite, 0: not, -1: error
- * (err set). */
+/* Numeric factorisation of the matrix in w->ax.  1: positive definite,
+ * 0: not, -1: error (err set). */
 int eq_factorize(eq_work *w, drape_error *err);
 /* out = A^-1 rhs (N numbers; out may be rhs).  0, or -1 with err set. */
 int eq_solve(eq_work *w, const double *rhs, double *out, drape_error *err);
