@@ -31,6 +31,7 @@
 #   BENCH_SPACING_SPECIMENS  specimens per spacing (16; at 0.5 cm a specimen
 #                 takes 10-80 s of CPU)
 #   BENCH_TABLES_ONLY=1  only rebuild the tables from the JSON files there
+#                 (stamped with the commits in the fall ensembles' .meta files)
 #   BENCH_DAMPING_SHEAR  a shear damping for every run (`--damping-shear`,
 #                 e.g. 0.5ms; default none: MODEL.md's dissipation). Its
 #                 ensembles go to docs/performance/ensemble/damping-shear-VALUE/
@@ -122,6 +123,12 @@ calibrate() {
 }
 
 [ "${BENCH_TABLES_ONLY:-0}" = 1 ] && CASES="" && SPACINGS_RUN="" || SPACINGS_RUN=$SPACINGS
+if [ "${BENCH_TABLES_ONLY:-0}" = 1 ]; then
+    # the tables' stamp names the commits that ran the fall ensembles (their
+    # .meta files), not the checkout that only rebuilt the tables
+    RUNS=$(sed -n 's/^commit: //p' "$OUT"/*-fall.meta 2>/dev/null | sort -u | paste -sd, -)
+    COMMIT="${RUNS:-unknown}; tables rebuilt with $COMMIT"
+fi
 for c in $CASES; do
     a=$(case_args "$c")
     # shellcheck disable=SC2086
