@@ -177,13 +177,67 @@ static void angle_hess(const angle_geo *G, double r, double p,
     }
 }
 
-/* Local force (9) and df/dx (9x9, NULL to skip) of a three-particle
- * element whose energy depends on the angle between a = sum_i ca[i] x_i and
- * b = sum_i cb[i] x_i. */
-static void angle_local(const angle_geo *G, const double ca[3],
-                        const double cb[3], double r, double p, double *fl,
+/* df/dx of an angle element is, in 3x3 blocks (i, j),
+ *     -((aa Haa + (ab Hab + ba Hab^T)) + bb Hbb),
+ * with aa = ca_i ca_j, ab = ca_i cb_j, ba = cb_i ca_j, bb = cb_i cb_j, all in
+ * {-1, 0, 1}.  The two functions below are that formula written out for the
+ * hinge's and the corner's coefficients: the terms with a zero coefficient
+ * left out (adding an exact zero changes at most the sign of a zero sum),
+ * the others added with their signs in the formula's order (a product by
+ * +-1 is exact), so the numbers are those of the product form at a third
+ * of its work, which had been the element kernels' largest cost
+ * (docs/performance.md, "The angle elements' blocks written out").  A =
+ * Haa[u][v], B = Hab[u][v], Bt = Hab[v][u], C = Hbb[u][v]. */
+static void angle_jac_hinge(double Haa[3][3], double Hab[3][3], double Hbb[3][3],
+                            double Jl[9][9])
+{
+    /* ca = (-1, 1, 0), cb = (0, -1, 1) */
+    for (int u = 0; u < 3; u++)
+        for (int v = 0; v < 3; v++) {
+            double A = Haa[u][v], B = Hab[u][v], Bt = Hab[v][u], C = Hbb[u][v];
+            Jl[u][v] = -A;
+            Jl[u][3 + v] = -(-A + B);
+            Jl[u][6 + v] = B;
+            Jl[3 + u][v] = -(-A + Bt);
+            Jl[3 + u][3 + v] = -((A + (-B - Bt)) + C);
+            Jl[3 + u][6 + v] = -(B - C);
+            Jl[6 + u][v] = Bt;
+            Jl[6 + u][3 + v] = -(Bt - C);
+            Jl[6 + u][6 + v] = -C;
+        }
+}
+
+static void angle_jac_corner(double Haa[3][3], double Hab[3][3], double Hbb[3][3],
+                             double Jl[9][9])
+{
+    /* ca = (-1, 1, 0), cb = (-1, 0, 1) */
+    for (int u = 0; u < 3; u++)
+        for (int v = 0; v < 3; v++) {
+            double A = Haa[u][v], B = Hab[u][v], Bt = Hab[v][u], C = Hbb[u][v];
+            Jl[u][v] = -((A + (B + Bt)) + C);
+            Jl[u][3 + v] = -(-A - Bt);
+            Jl[u][6 + v] = -(-B - C);
+            Jl[3 + u][v] = -(-A - B);
+            Jl[3 + u][3 + v] = -A;
+            Jl[3 + u][6 + v] = -B;
+            Jl[6 + u][v] = -(-Bt - C);
+            Jl[6 + u][3 + v] = -Bt;
+            Jl[6 + u][6 + v] = -C;
+        }
+}
+
+static const double HINGE_CA[3] = {-1.0, 1.0, 0.0}; /* a = x_mid - x_prev */
+static const double HINGE_CB[3] = {0.0, -1.0, 1.0}; /* b = x_next - x_mid */
+static const double CORNER_CA[3] = {-1.0, 1.0, 0.0}; /* a = x_warp - x_mid */
+static const double CORNER_CB[3] = {-1.0, 0.0, 1.0}; /* b = x_weft - x_mid */
+
+/* Local force (9) and df/dx (9x9, NULL to skip) of a hinge (corner 0) or a
+ * corner (corner 1): an element whose energy depends on the angle between
+ * a = sum_i ca[i] x_i and b = sum_i cb[i] x_i. */
+static void angle_local(const angle_geo *G, int corner, double r, double p, double *fl,
                         double Jl[9][9])
 {
+    const double *ca = corner ? CORNER_CA : HINGE_CA, *cb = corner ? CORNER_CB : HINGE_CB;
     double ga[3], gb[3];
     angle_grad(G, r, ga, gb);
     for (int i = 0; i < 3; i++)
@@ -192,14 +246,10 @@ static void angle_local(const angle_geo *G, const double ca[3],
     if (!Jl) return;
     double Haa[3][3], Hab[3][3], Hbb[3][3];
     angle_hess(G, r, p, Haa, Hab, Hbb);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            for (int u = 0; u < 3; u++)
-                for (int v = 0; v < 3; v++)
-                    Jl[3 * i + u][3 * j + v] =
-                        -(ca[i] * ca[j] * Haa[u][v] +
-                          (ca[i] * cb[j] * Hab[u][v] + cb[i] * ca[j] * Hab[v][u]) +
-                          cb[i] * cb[j] * Hbb[u][v]);
+    if (corner)
+        angle_jac_corner(Haa, Hab, Hbb, Jl);
+    else
+        angle_jac_hinge(Haa, Hab, Hbb, Jl);
 }
 
 /* ------------------------------------------------------- energy functions */
@@ -266,10 +316,6 @@ static double shear_g(const drape_model *m, double wt, double gamma,
 
 /* ------------------------------------------------------- element kernels */
 
-static const double HINGE_CA[3] = {-1.0, 1.0, 0.0}; /* a = x_mid - x_prev */
-static const double HINGE_CB[3] = {0.0, -1.0, 1.0}; /* b = x_next - x_mid */
-static const double CORNER_CA[3] = {-1.0, 1.0, 0.0}; /* a = x_warp - x_mid */
-static const double CORNER_CB[3] = {-1.0, 0.0, 1.0}; /* b = x_weft - x_mid */
 
 /* Edge vector of segment ref into d; 1 if the segment is degenerate. */
 static int seg_edge(const drape_model *m, int ref, double *d)
@@ -375,7 +421,7 @@ static int kern_bend(const drape_model *m, const drape_hinge *h,
     }
     double r = gop * ratio;
     double p = g2 - r * G.cn;
-    angle_local(&G, HINGE_CA, HINGE_CB, r, p, fl, Jl);
+    angle_local(&G, 0, r, p, fl, Jl);
     return 0;
 }
 
@@ -393,7 +439,7 @@ static int kern_shear(const drape_model *m, const drape_corner *cn,
     shear_g(m, cn->weight, gamma, &d1, &d2);
     double r = -d1 / G.sn;
     double p = d2 - r * G.cn;
-    angle_local(&G, CORNER_CA, CORNER_CB, r, p, fl, Jl);
+    angle_local(&G, 1, r, p, fl, Jl);
     return 0;
 }
 
@@ -420,7 +466,7 @@ static int kern_shear_damp(const drape_model *m, const drape_corner *cn, const i
     if (angle_geo_set(m, ref[0], ref[1], Jl ? GEO_HESS : 0u, &G)) return 1;
     if (G.s < MODEL_SIN_TINY) return 1;
     double kd = m->o.beta_shear * m->shear_g0 * cn->weight * m->L->sigma * m->L->sigma / 4.0;
-    angle_local(&G, CORNER_CA, CORNER_CB, -1.0 / G.sn, G.cn / G.sn, g, Jl ? H : NULL);
+    angle_local(&G, 1, -1.0 / G.sn, G.cn / G.sn, g, Jl ? H : NULL);
     for (int a = 0; a < 9; a++) {
         g[a] = -g[a];
         if (v) s += g[a] * v[3 * ids[a / 3] + a % 3];
@@ -604,14 +650,19 @@ static void add_forces(double *f, const int *ids, int np, const double *fl)
 static void add_blocks_ld(const drape_model *m, const int64_t *slots,
                           const int *ids, int np, const double *Jl, int ld, double *V)
 {
+    int64_t st[4]; /* column strides of the element's particles (np <= 4) */
+    for (int j = 0; j < np; j++) {
+        int fid = m->L->free_id[ids[j]];
+        st[j] = fid >= 0 ? m->colstride[fid] : 0; /* fixed: no slot uses it */
+    }
     for (int i = 0; i < np; i++) {
         for (int j = 0; j < np; j++) {
             int64_t s = slots[np * i + j];
             if (s < 0) continue;
-            int64_t st = m->colstride[m->L->free_id[ids[j]]];
-            for (int c = 0; c < 3; c++)
-                for (int r = 0; r < 3; r++)
-                    V[s + c * st + r] += Jl[(3 * i + r) * ld + 3 * j + c];
+            const double *J = Jl + 3 * i * ld + 3 * j;
+            double *W = V + s;
+            for (int c = 0; c < 3; c++, W += st[j])
+                for (int r = 0; r < 3; r++) W[r] += J[r * ld + c];
         }
     }
 }
@@ -638,11 +689,17 @@ static void measure_segments(drape_model *m, const double *x)
     }
 }
 
+/* 1 if every a[i] is finite: NaN or inf anywhere makes a sum of a[i] * 0
+ * NaN.  Four sums, so that the additions do not wait on one another (one
+ * chain of dependent additions had been 2-3 % of a fall's CPU). */
 static int all_finite(const double *a, int64_t n)
 {
-    double acc = 0.0;
-    for (int64_t i = 0; i < n; i++) acc += a[i] * 0.0;
-    return acc == 0.0; /* NaN or inf anywhere makes acc NaN */
+    double acc[4] = {0.0, 0.0, 0.0, 0.0};
+    int64_t i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int k = 0; k < 4; k++) acc[k] += a[i + k] * 0.0;
+    for (; i < n; i++) acc[0] += a[i] * 0.0;
+    return (acc[0] + acc[1]) + (acc[2] + acc[3]) == 0.0;
 }
 
 /* f (3n), K, D (nnz) for the selected parts; any output may be NULL. */
