@@ -44,6 +44,13 @@
 #include "drape/units.h"
 #include "drape/yamldoc.h"
 
+/* A fall that gains more than this fraction of the energy it dissipates
+ * (energy_gain_J against energy_total_start_J - energy_total_end_J) is
+ * warned about: measured gains are either zero or of the order of the
+ * whole dissipated energy (docs/ensemble.md, "Energy gained by the
+ * fixed-step fall"). */
+#define DRAPE_CLI_GAIN_WARN 1e-2
+
 /* ---- result keys --------------------------------------------------------- */
 
 const char *const drape_cli_run_keys[] = {
@@ -71,7 +78,9 @@ const char *const drape_cli_run_keys[] = {
     /* eleventh session: the fall's error control (--fall-tol), and its steps */
     "fall_tol_m", "fall_steps",
     /* thirteenth session: the shear damping (damping.shear, --damping-shear) */
-    "damping_shear_s", NULL};
+    "damping_shear_s",
+    /* sixteenth session: energy the fall's integrator created */
+    "energy_gain_J", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -600,6 +609,26 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                          method == DRAPE_METHOD_FALL && s.fall_tol > 0.0 ? s.fall_tol : NAN);
     drape_cli_result_int(&r, "fall_steps", method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_steps : NAN);
     drape_cli_result_num(&r, "damping_shear_s", s.damping_shear);
+    {
+        /* energy that the fall's integrator created: its total energy
+         * above its value at the start (the model only dissipates) */
+        int fall = method == DRAPE_METHOD_FALL && sim_ok && isfinite(er.dyn_e_max);
+        double gain = fall ? fmax(0.0, er.dyn_e_max - er.dyn_e_start) : NAN;
+        drape_cli_result_num(&r, "energy_gain_J", gain);
+        double lost = fall ? er.dyn_e_start - er.dyn_e_end : NAN;
+        if (fall && gain > DRAPE_CLI_GAIN_WARN * fabs(lost)) {
+            drape_error w;
+            drape_error_clear(&w);
+            drape_error_set(&w, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                            "the fall gained energy: its total energy rose %.3g J above its "
+                            "value at the start and ended %+.3g J from it; the model only "
+                            "dissipates, so the integrator created that energy, and this rest "
+                            "state may not be one that the physical fall reaches "
+                            "(docs/ensemble.md, \"Energy gained by the fixed-step fall\")",
+                            gain, -lost);
+            drape_cli_warn(NULL, &w);
+        }
+    }
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -617,7 +617,7 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
     r->omega_min = NAN;
     r->max_force_rel = NAN;
     r->energy_J = NAN;
-    r->dyn_e_start = r->dyn_e_end = r->dyn_e_max_rise = NAN;
+    r->dyn_e_start = r->dyn_e_end = r->dyn_e_max_rise = r->dyn_e_max = NAN;
 
     eq_work w;
     memset(&w, 0, sizeof w);

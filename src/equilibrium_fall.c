@@ -121,7 +121,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     r->dyn_dt_min = INFINITY;
     r->dyn_dt_max = 0.0;
     double e_prev = total_energy(w, x, v);
-    r->dyn_e_start = r->dyn_e_end = e_prev;
+    r->dyn_e_start = r->dyn_e_end = r->dyn_e_max = e_prev;
     r->dyn_e_max_rise = NAN;
     double e_low_all = e_prev; /* the lowest total energy so far */
     for (;;) {
@@ -317,6 +317,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         if (hs > r->dyn_dt_max) r->dyn_dt_max = hs;
         double rise = e_now - e_prev;
         if (!isnan(rise) && !(rise <= r->dyn_e_max_rise)) r->dyn_e_max_rise = rise;
+        if (!(e_now <= r->dyn_e_max)) r->dyn_e_max = e_now;
         e_prev = r->dyn_e_end = e_now;
     }
     drape_free(ring);

@@ -146,6 +146,11 @@ typedef struct drape_equilibrium_result {
                               (negative: it fell at every step; NaN without
                               a step).  The model dissipates, so a rise is
                               the integrator's (docs/ensemble.md) */
+    double dyn_e_max;      /* J: the largest value of that total at the start
+                              and after each step (NaN without a dynamics
+                              stage); above dyn_e_start, the integrator
+                              created energy (docs/ensemble.md, "Energy
+                              gained by the fixed-step fall") */
     int ptc_steps;        /* accepted PTC steps */
     int newton_steps;     /* accepted Newton steps */
     int rejected;         /* iterations whose step was refused */
