@@ -17,7 +17,7 @@
 
 #include "drape/ensemble.h"
 
-#define DRAPE_CLI_RESULT_MAX 72
+#define DRAPE_CLI_RESULT_MAX 96
 #define DRAPE_CLI_TEXT_MAX 128
 
 typedef enum drape_cli_ftype {

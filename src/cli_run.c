@@ -80,7 +80,7 @@ const char *const drape_cli_run_keys[] = {
     /* thirteenth session: the shear damping (damping.shear, --damping-shear) */
     "damping_shear_s",
     /* sixteenth session: energy the fall's integrator created */
-    "energy_gain_J", NULL};
+    "energy_gain_J", "fall_redone", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -232,6 +232,8 @@ static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
     eo.dyn_time_max = DRAPE_FALL_TIME_MAX * fall_time;
     eo.dyn_dt_swing = DRAPE_FALL_SWING_STEP * fall_step; /* at a longer step */
     eo.dyn_tol = fall_tol; /* or the step chosen by its error (--fall-tol) */
+    /* a fixed-step fall that gains energy falls again, error-controlled */
+    eo.dyn_redo_tol = fall_tol > 0.0 ? 0.0 : DRAPE_FALL_REDO_TOL;
     /* after a fall a limp cloth can still be far from rest: the settling
      * may need more than the static method's iterations (measured: a
      * ponte-roma specimen, 704) */
@@ -615,6 +617,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         int fall = method == DRAPE_METHOD_FALL && sim_ok && isfinite(er.dyn_e_max);
         double gain = fall ? fmax(0.0, er.dyn_e_max - er.dyn_e_start) : NAN;
         drape_cli_result_num(&r, "energy_gain_J", gain);
+        drape_cli_result_int(&r, "fall_redone", fall ? er.dyn_redone : NAN);
         double lost = fall ? er.dyn_e_start - er.dyn_e_end : NAN;
         if (fall && gain > DRAPE_CLI_GAIN_WARN * fabs(lost)) {
             drape_error w;

@@ -636,6 +636,7 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         !(o.dyn_time_max >= 0.0) || !isfinite(o.dyn_time_max) ||
         !(o.dyn_dt_swing >= 0.0) || !isfinite(o.dyn_dt_swing) ||
         !(o.dyn_tol >= 0.0) || !isfinite(o.dyn_tol) ||
+        !(o.dyn_redo_tol >= 0.0) || !isfinite(o.dyn_redo_tol) ||
         !(o.dt_growth_max >= 1.0) || !(o.dt_growth_min >= 1.0) ||
         o.dt_growth_min > o.dt_growth_max || !(o.dt_newton >= 0.0) ||
         o.eig_iters < 0 || !(o.force_ref >= 0.0) || !isfinite(o.force_ref) ||
@@ -702,7 +703,24 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
 
     if (o.dyn_time > 0.0) {
         double tmax = o.dyn_time_max > 0.0 ? o.dyn_time_max : 4.0 * o.dyn_time;
+        /* the start, kept for a second fall (dyn_redo_tol) */
+        size_t n3 = 3 * (size_t)L->n;
+        double *x_start = o.dyn_redo_tol > 0.0 && !(o.dyn_tol > 0.0)
+                              ? drape_malloc(sizeof(double) * n3) : NULL;
+        if (o.dyn_redo_tol > 0.0 && !(o.dyn_tol > 0.0) && !x_start) {
+            drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+            goto out;
+        }
+        if (x_start) memcpy(x_start, x, sizeof(double) * n3);
         int rcd = eq_fall(&w, x, &o, tmax, err);
+        if (rcd == 3) { /* it gained energy: fall again, error-controlled */
+            drape_equilibrium_opts o2 = o;
+            o2.dyn_tol = o.dyn_redo_tol;
+            memcpy(x, x_start, sizeof(double) * n3);
+            r->dyn_redone = 1;
+            rcd = eq_fall(&w, x, &o2, tmax, err);
+        }
+        drape_free(x_start);
         if (rcd < 0) goto out;
         if (rcd == 1 || eval_energy(&w, x, &Ec) != 0 || eval_forces(&w, x, w.f) != 0) {
             drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,

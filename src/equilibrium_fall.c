@@ -81,8 +81,9 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  * more than DRAPE_EQ_FALL_RISE of the energy dissipated so far is redone
  * at half the step: the position estimate does not see a step that pumps
  * energy into a fold.  Every step's total energy is recorded (r->dyn_e_*).
- * Returns 0, 1 (folded or too small a step), 2 (stop raised) or -1 (err
- * set). */
+ * Returns 0, 1 (folded or too small a step), 2 (stop raised), 3 (a
+ * fixed-step fall whose total energy rose above its start, with
+ * o->dyn_redo_tol > 0: x is then a state of no use) or -1 (err set). */
 int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
             drape_error *err)
 {
@@ -288,6 +289,10 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         } else if (long_step && !(e_now <= e_low + DRAPE_EQ_SWING_RISE * ke_peak)) {
             h_redo = h_fall;
             long_step = 0;
+        }
+        if (!adaptive && o->dyn_redo_tol > 0.0 && !(e_now <= r->dyn_e_start)) {
+            rc = 3; /* energy above the start: the caller falls again */
+            break;
         }
         if (h_redo > 0.0) {
             memcpy(x, xp, sizeof(double) * n3);

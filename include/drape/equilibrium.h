@@ -90,6 +90,13 @@ typedef struct drape_equilibrium_opts {
                             dissipated so far is redone at half the step
                             (counted in dyn_refused).  0 = the fixed step
                             dyn_dt (default) */
+    double dyn_redo_tol; /* m; > 0 with dyn_tol = 0: a fixed-step fall whose
+                            total energy climbs above its value at the
+                            start (energy the model cannot have: its
+                            linearly implicit step pumped it) is stopped
+                            there and the dynamics are done again from the
+                            start with dyn_tol = dyn_redo_tol (dyn_redone
+                            = 1); 0 = off */
     int dyn_only;        /* 1: return after the damped dynamics (status
                             DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
@@ -131,6 +138,8 @@ typedef struct drape_equilibrium_result {
     int iterations;       /* iterations of the loop (each factorises once,
                              twice when Newton falls back to Hc) */
     int dyn_steps;        /* damped dynamics steps */
+    int dyn_redone;       /* 1: the fixed-step fall gained energy and the
+                             dynamics were done again with dyn_redo_tol */
     int dyn_refused;      /* steps refused because the total energy rose:
                              swing steps at dyn_dt_swing (then dyn_dt on),
                              or steps of the error-controlled fall (redone
