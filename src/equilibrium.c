@@ -705,9 +705,9 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         double tmax = o.dyn_time_max > 0.0 ? o.dyn_time_max : 4.0 * o.dyn_time;
         /* the start, kept for a second fall (dyn_redo_tol) */
         size_t n3 = 3 * (size_t)L->n;
-        double *x_start = o.dyn_redo_tol > 0.0 && !(o.dyn_tol > 0.0)
-                              ? drape_malloc(sizeof(double) * n3) : NULL;
-        if (o.dyn_redo_tol > 0.0 && !(o.dyn_tol > 0.0) && !x_start) {
+        int redo = o.dyn_redo_tol > 0.0 && !(o.dyn_tol > 0.0);
+        double *x_start = redo ? drape_malloc(sizeof(double) * n3) : NULL;
+        if (redo && !x_start) {
             drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
             goto out;
         }
