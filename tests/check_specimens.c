@@ -291,6 +291,21 @@ START_TEST(test_fall_tol_keys)
         ck_assert_msg(jnum(o, "fall_redone") == 1.0 && jnum(o, "energy_gain_J") == 0.0,
                       "redone %g, gain %g J", jnum(o, "fall_redone"), jnum(o, "energy_gain_J"));
         ck_assert(jnum(o, "energy_total_end_J") < jnum(o, "energy_total_start_J"));
+        /* the second fall starts afresh: the same specimen, bit for bit, as
+         * an error-controlled fall from the start at the same tolerance
+         * (3e-5 m as a bare number: "30 um" parses to 30 * 1e-6, one unit
+         * in the last place below 30e-6) */
+        snprintf(args, sizeof args, "run -q %s --fall-tol 3e-5", scene);
+        ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+        json_object *t = json_tokener_parse(out);
+        ck_assert_msg(t != NULL, "%s", out);
+        ck_assert(jnum(t, "fall_redone") == 0.0);
+        const char *same[] = {"dc", "max_force_rel", "energy_total_end_J", "fall_steps",
+                              "fall_end_s", "iterations"};
+        for (int k = 0; k < 6; k++)
+            ck_assert_msg(jnum(o, same[k]) == jnum(t, same[k]), "%s: %.17g redone, %.17g",
+                          same[k], jnum(o, same[k]), jnum(t, same[k]));
+        json_object_put(t);
         json_object_put(o);
     }
     /* bad values */
