@@ -1052,7 +1052,7 @@ START_TEST(test_fall_params)
     ck_assert_close_rel(t, 10.0 * sqrt(0.06 / 9.80665), 1e-12);
     ck_assert_close_rel(h, sqrt(0.06 / 9.80665) / 32.0, 1e-12);
     load_example("scenes/table.yaml", &s);
-    ck_assert_int_eq(s.specimens, 28);
+    ck_assert_int_eq(s.specimens, 10);
     drape_scene_fall_params(&s, &t, &h);
     ck_assert_close_rel(t, 10.0 * sqrt(0.12 / 9.80665), 1e-12);
     s.fall_time = 0.3;
