@@ -53,7 +53,8 @@ static const char batch_usage[] =
     "  --integrator NAME, --rtol X, --atol X, --spacing LEN, --energy-form FORM,\n"
     "  --t-max T, --max-steps N, --strain-limit X, --method fall|dynamic|static,\n"
     "  --linear-solver NAME, --max-order N, --specimens N, --seed N,\n"
-    "  --fall-time T, --fall-step T, --fall-swing X, --fall-tol L, --terms LIST,\n"
+    "  --fall-time T, --fall-step T, --fall-swing X, --fall-tol L,\n"
+    "  --fall-fold-time T, --terms LIST,\n"
     "  --damping-shear T (each fabric's specimens run one after another in its\n"
     "  process; the results carry the ensemble columns dc_sd,\n"
     "  dc_ci95, dc_mode, nodes_hist, specimens: docs/ensemble.md)\n"
@@ -578,7 +579,7 @@ int drape_cli_batch(int argc, char **argv)
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
            O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
            O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_FALLSWING, O_TERMS,
-           O_FALLTOL, O_DAMPSHEAR };
+           O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -601,6 +602,7 @@ int drape_cli_batch(int argc, char **argv)
         {"fall-step", required_argument, NULL, O_FALLSTEP},
         {"fall-swing", required_argument, NULL, O_FALLSWING},
         {"fall-tol", required_argument, NULL, O_FALLTOL},
+        {"fall-fold-time", required_argument, NULL, O_FALLFOLD},
         {"damping-shear", required_argument, NULL, O_DAMPSHEAR},
         {"terms", required_argument, NULL, O_TERMS},
         {"quiet", no_argument, NULL, 'q'},
@@ -676,6 +678,10 @@ int drape_cli_batch(int argc, char **argv)
         case O_FALLTOL:
             name = "--fall-tol";
             if (check_quantity(name, optarg, DRAPE_DIM_LENGTH, 0)) return 2;
+            break;
+        case O_FALLFOLD:
+            name = "--fall-fold-time";
+            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0)) return 2;
             break;
         case O_DAMPSHEAR:
             name = "--damping-shear";

@@ -80,7 +80,9 @@ const char *const drape_cli_run_keys[] = {
     /* thirteenth session: the shear damping (damping.shear, --damping-shear) */
     "damping_shear_s",
     /* sixteenth session: energy the fall's integrator created */
-    "energy_gain_J", "fall_redone", NULL};
+    "energy_gain_J", "fall_redone",
+    /* seventeenth session: the fall's fold phase at half its step */
+    "fall_fold_time_s", "fall_fold_step_s", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -218,19 +220,29 @@ static void fabric_warn(void *ctx, const drape_error *w)
 /* The static method: minimise E_pot from the initial state and present the
  * result as a run (status equilibrium or failed, no time, no integrator
  * statistics).  Frames: the final state only.  Returns 1 on success. */
-static int run_static(drape_model *m, const drape_fabric *f, double fall_time,
-                      double fall_step, double fall_swing, double fall_tol, run_ctx *rc,
+/* The fall method's numbers (time 0: the static method). */
+typedef struct fall_params {
+    double time, step;           /* s: least duration, fixed step */
+    double fold_time, fold_step; /* s: the fold phase (0, 0: none) */
+    double swing;                /* fraction of the peak kinetic energy */
+    double tol;                  /* m: > 0 error-controlled (--fall-tol) */
+} fall_params;
+
+static int run_static(drape_model *m, const drape_fabric *f, const fall_params *fp, run_ctx *rc,
                       drape_sim_result *res,
                       drape_equilibrium_result *er, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
     drape_equilibrium_opts eo;
     drape_equilibrium_opts_from_fabric(&eo, f);
+    double fall_time = fp->time, fall_tol = fp->tol;
     eo.dyn_time = fall_time; /* the fall method: damped large-step dynamics first */
-    eo.dyn_dt = fall_step;
-    eo.dyn_ke_frac = fall_swing; /* and on while the cloth still swings */
+    eo.dyn_dt = fp->step;
+    eo.dyn_time_fold = fp->fold_time; /* the first part at a shorter step */
+    eo.dyn_dt_fold = fp->fold_step;
+    eo.dyn_ke_frac = fp->swing; /* and on while the cloth still swings */
     eo.dyn_time_max = DRAPE_FALL_TIME_MAX * fall_time;
-    eo.dyn_dt_swing = DRAPE_FALL_SWING_STEP * fall_step; /* at a longer step */
+    eo.dyn_dt_swing = DRAPE_FALL_SWING_STEP * fp->step; /* at a longer step */
     eo.dyn_tol = fall_tol; /* or the step chosen by its error (--fall-tol) */
     /* a fixed-step fall that gains energy falls again, error-controlled */
     eo.dyn_redo_tol = fall_tol > 0.0 ? 0.0 : DRAPE_FALL_REDO_TOL;
@@ -358,6 +370,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_step > 0) s.fall_step = ra->fall_step;
     if (ra->fall_swing >= 0) s.fall_swing = ra->fall_swing;
     if (ra->fall_tol >= 0) s.fall_tol = ra->fall_tol;
+    if (ra->fall_fold_time >= 0) s.fall_fold_time = ra->fall_fold_time;
     if (ra->damping_shear >= 0) s.damping_shear = ra->damping_shear;
     if (ri && ri->damping_shear >= 0) s.damping_shear = ri->damping_shear; /* what ran */
     if (ra->substeps > 0) s.substeps = ra->substeps;
@@ -379,8 +392,15 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     /* animate: the dynamic run with the fixed-step integrator */
     if (method == DRAPE_METHOD_ANIMATE) snprintf(s.integrator, sizeof s.integrator, "animate");
     int method_static = method == DRAPE_METHOD_STATIC || method == DRAPE_METHOD_FALL;
-    double fall_time = 0.0, fall_step = 0.0;
-    if (method == DRAPE_METHOD_FALL) drape_scene_fall_params(&s, &fall_time, &fall_step);
+    fall_params fp = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    if (method == DRAPE_METHOD_FALL) {
+        drape_scene_fall_params(&s, &fp.time, &fp.step);
+        fp.tol = s.fall_tol;
+        /* the fold phase belongs to the fixed step */
+        if (!(fp.tol > 0.0)) drape_scene_fall_fold(&s, fp.time, fp.step, &fp.fold_time, &fp.fold_step);
+    }
+    fp.swing = drape_scene_fall_swing(&s);
+    double fall_time = fp.time, fall_step = fp.step;
 
     if (drape_fabric_load(s.fabric_path, &f, &err,
                           resume_dir || ra->no_warnings ? NULL : fabric_warn, &s.terms) != 0)
@@ -417,8 +437,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.frame = ri ? ri->frames : 0;
 
     if (method_static) {
-        sim_ok = run_static(m, &f, fall_time, fall_step, drape_scene_fall_swing(&s),
-                            method == DRAPE_METHOD_FALL ? s.fall_tol : 0.0, &rc, &res, &er, &err);
+        sim_ok = run_static(m, &f, &fp, &rc, &res, &er, &err);
         if (stop_signal) { /* the solve stops at its next iteration */
             interrupted = 1;
             res.status = DRAPE_SIM_INTERRUPTED;
@@ -632,6 +651,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
             drape_cli_warn(NULL, &w);
         }
     }
+    drape_cli_result_num(&r, "fall_fold_time_s", fp.fold_time > 0.0 ? fp.fold_time : NAN);
+    drape_cli_result_num(&r, "fall_fold_step_s", fp.fold_time > 0.0 ? fp.fold_step : NAN);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -632,6 +632,8 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         !(o.clamp_k[1] >= 0.0) || !isfinite(o.clamp_k[0]) || !isfinite(o.clamp_k[1]) ||
         !(o.dyn_time >= 0.0) || !isfinite(o.dyn_time) ||
         (o.dyn_time > 0.0 && !(o.dyn_dt > 0.0 && isfinite(o.dyn_dt))) || !(o.dt0 >= 0.0) ||
+        !(o.dyn_time_fold >= 0.0) || !isfinite(o.dyn_time_fold) ||
+        (o.dyn_time_fold > 0.0 && !(o.dyn_dt_fold > 0.0 && isfinite(o.dyn_dt_fold))) ||
         !(o.dyn_ke_frac >= 0.0 && o.dyn_ke_frac < 1.0) ||
         !(o.dyn_time_max >= 0.0) || !isfinite(o.dyn_time_max) ||
         !(o.dyn_dt_swing >= 0.0) || !isfinite(o.dyn_dt_swing) ||

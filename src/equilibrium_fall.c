@@ -62,7 +62,9 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  *     (M - b h D - (b h)^2 K) dv = M (vh - v_n) + b h f(x0, v_n),
  * K (the conservative forces' df/dx) and D (the dampers' df/dv) at
  * (x0, v_n).  Runs for time o->dyn_time (it follows the physical fall,
- * with inertia, into the basin that the dynamic run would reach),
+ * with inertia, into the basin that the dynamic run would reach), the
+ * first o->dyn_time_fold of it (while the folds form) at the step
+ * o->dyn_dt_fold,
  * then, with o->dyn_ke_frac > 0, on while the cloth swings (up to T_max)
  * at the step o->dyn_dt_swing (0 = dyn_dt), from a BDF1 step.
  *
@@ -93,7 +95,10 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     drape_equilibrium_result *r = w->r;
     const double T = o->dyn_time, ke_frac = o->dyn_ke_frac, tol = o->dyn_tol;
     const int adaptive = tol > 0.0;
-    double h = adaptive ? 0.25 * o->dyn_dt : o->dyn_dt;
+    /* the fixed step's fold phase: [0, T_fold) at dyn_dt_fold */
+    const double T_fold = adaptive ? 0.0 : o->dyn_time_fold;
+    int folding = T_fold > 0.0;
+    double h = adaptive ? 0.25 * o->dyn_dt : folding ? o->dyn_dt_fold : o->dyn_dt;
     double h_swing = adaptive ? 0.0 : o->dyn_dt_swing;
     const double h_min = o->dyn_dt / 64.0, h_max = 8.0 * o->dyn_dt;
     size_t n3 = 3 * (size_t)L->n;
@@ -104,7 +109,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
      * pendulum times of the Cusick fall), so that a swing's turning point
      * does not end the fall: a ring of the last nwin steps' (t, E_kin),
      * enough for tw at the shortest step */
-    double h_short = adaptive ? h_min : fmin(h, h_swing > 0.0 ? h_swing : h);
+    double h_short = adaptive ? h_min : fmin(fmin(h, o->dyn_dt), h_swing > 0.0 ? h_swing : h);
     int nwin = (int)ceil(tw / h_short) + 1, iw = 0;
     if (nwin > DRAPE_EQ_KE_WINDOW_MAX) nwin = DRAPE_EQ_KE_WINDOW_MAX;
     double *ring = drape_malloc(2 * (size_t)nwin * sizeof(double)), *ring_t = ring + nwin;
@@ -126,6 +131,21 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     r->dyn_e_max_rise = NAN;
     double e_low_all = e_prev; /* the lowest total energy so far */
     for (;;) {
+        /* the folds have formed: on at dyn_dt, or at the same fraction of
+         * it if the fold phase's step was halved; the first longer step is
+         * the variable-step BDF2 below (a BDF1 restart here, first order,
+         * cost the chain of test_fall_fold more accuracy than the fold
+         * phase had gained).  Like the swing's, the longer step is refused
+         * if it raises the total energy (it can pump energy into folds
+         * that are forming: measured on the table scene), and the fall
+         * goes on at the fold step */
+        if (folding && t >= fmin(T_fold, T) * (1.0 - 1e-12)) {
+            folding = 0;
+            h_fall = h;
+            h = o->dyn_dt * (h / o->dyn_dt_fold);
+            long_step = 1;
+            e_low = total_energy(w, x, v);
+        }
         /* past T, go on (whole steps, the last one cut at T_max) while the
          * cloth still swings, at the step h_swing (BDF1 restart) */
         int extend = 0;
@@ -134,6 +154,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
                 break;
             extend = 1;
             if (!swinging && h_swing > 0.0 && h_swing != h) {
+                h_fall = h;
                 h = h_swing;
                 have_prev = 0;
                 long_step = 1;
@@ -142,13 +163,16 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             swinging = 1;
         }
         if (o->stop && *o->stop) { rc = 2; break; }
-        double rem = (extend ? T_max : T) - t;
+        double rem = (folding ? fmin(T_fold, T) : extend ? T_max : T) - t;
         /* a whole step when the rest is h but for rounding: no BDF1
          * restart */
         double hs = rem > h * (1.0 - 1e-9) ? h : rem;
         int bdf2 = have_prev;
+        /* BDF2 with a step ratio: the error-controlled fall, the first step
+         * after the fold phase, and a fixed-step fall's last step when cut */
+        int vs = bdf2 && (adaptive || hs != h_prev);
         double b = bdf2 ? 2.0 / 3.0 : 1.0, c1 = 4.0 / 3.0, c2 = -1.0 / 3.0;
-        if (bdf2 && adaptive) {
+        if (vs) {
             double q = hs / h_prev;
             c1 = (1.0 + q) * (1.0 + q) / (1.0 + 2.0 * q);
             c2 = -q * q / (1.0 + 2.0 * q);
@@ -164,7 +188,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
                 if (!bdf2) {
                     xh = x[k + c];
                     vh = v[k + c];
-                } else if (!adaptive) { /* the fixed step's own arithmetic */
+                } else if (!vs) { /* the fixed step's own arithmetic */
                     xh = (4.0 * x[k + c] - xp[k + c]) / 3.0;
                     vh = (4.0 * v[k + c] - vp[k + c]) / 3.0;
                 } else {
@@ -281,7 +305,9 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
          *   measured on the table scene, +1.5 % of the peak kinetic energy
          *   in five steps), by more than DRAPE_EQ_SWING_RISE of the peak
          *   kinetic energy over the lowest total energy since the change of
-         *   step: the swing goes on at the fall's own step. */
+         *   step: the swing goes on at the fall's own step; the same for
+         *   the fall step after the fold phase, which then goes on at the
+         *   fold step. */
         double e_now = total_energy(w, x, v), h_redo = 0.0;
         if (adaptive && e_now - e_prev > DRAPE_EQ_FALL_RISE * (r->dyn_e_start - e_low_all) &&
             hs > h_min * (1.0 + 1e-9)) {

@@ -208,6 +208,15 @@ void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_
     *step_s = s->fall_step > 0.0 ? s->fall_step : DRAPE_FALL_STEP_FACTOR * tau;
 }
 
+void drape_scene_fall_fold(const drape_scene *s, double time_s, double step_s,
+                           double *fold_time_s, double *fold_step_s)
+{
+    double t = s->fall_fold_time >= 0.0 ? s->fall_fold_time : DRAPE_FALL_FOLD_TIME * time_s;
+    if (t > time_s) t = time_s;
+    *fold_time_s = t > 0.0 ? t : 0.0;
+    *fold_step_s = t > 0.0 ? DRAPE_FALL_FOLD_STEP * step_s : 0.0;
+}
+
 double drape_scene_fall_swing(const drape_scene *s)
 {
     return s->fall_swing >= 0.0 ? s->fall_swing : DRAPE_FALL_SWING;

@@ -666,6 +666,9 @@ START_TEST(test_bad_ranges)
                  "solver: {rtol: 1.5}\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 16, "solver.rtol", "(0, 1)");
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "solver: {fall_fold_time: -1 s}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 26, "solver.fall_fold_time", NULL);
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "solver: {atol: 0}\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 16, "solver.atol", "(0, 1)");
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
@@ -1040,7 +1043,9 @@ END_TEST
 
 /* The fall method's time scale: the pendulum time sqrt(h / g) of the free
  * length h (Cusick (D - d)/2 = 6 cm, table (60 - 36)/2 = 12 cm), 10 of
- * them for the fall and 1/32 of one per step; the scene's keys win. */
+ * them for the fall and 1/32 of one per step; the scene's keys win.  The
+ * fold phase: the first half of the fall at half the step, or
+ * solver.fall_fold_time (0: none; at most the fall time). */
 START_TEST(test_fall_params)
 {
     drape_scene s;
@@ -1051,6 +1056,20 @@ START_TEST(test_fall_params)
     drape_scene_fall_params(&s, &t, &h);
     ck_assert_close_rel(t, 10.0 * sqrt(0.06 / 9.80665), 1e-12);
     ck_assert_close_rel(h, sqrt(0.06 / 9.80665) / 32.0, 1e-12);
+    double tf, hf;
+    drape_scene_fall_fold(&s, t, h, &tf, &hf);
+    ck_assert_close_rel(tf, 5.0 * sqrt(0.06 / 9.80665), 1e-12);
+    ck_assert_close_rel(hf, sqrt(0.06 / 9.80665) / 64.0, 1e-12);
+    s.fall_fold_time = 0.0;
+    drape_scene_fall_fold(&s, t, h, &tf, &hf);
+    ck_assert(tf == 0.0 && hf == 0.0);
+    s.fall_fold_time = 2.0; /* longer than the fall: all of it */
+    drape_scene_fall_fold(&s, t, h, &tf, &hf);
+    ck_assert(tf == t && hf == 0.5 * h);
+    drape_error e;
+    ck_assert_int_eq(load_text("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                               "solver: {fall_fold_time: 0.1 s}\nend: {t_max: 5 s}\n", &s, &e), 0);
+    ck_assert_double_eq_tol(s.fall_fold_time, 0.1, 1e-15);
     load_example("scenes/table.yaml", &s);
     ck_assert_int_eq(s.specimens, 10);
     drape_scene_fall_params(&s, &t, &h);
