@@ -20,7 +20,9 @@
 #
 # Environment:
 #   BENCH_CASES   cases to run (default: all; see case_args)
-#   BENCH_REF_SPECIMENS, BENCH_FAST_SPECIMENS   (16, 32)
+#   BENCH_REF_SPECIMENS, BENCH_FAST_SPECIMENS   (16, 128: a fall specimen
+#                 costs about a second, and with 32 its own interval was as
+#                 wide as the reference's; seventeenth session)
 #   BENCH_JOBS    specimens at a time (2)
 #   BENCH_REUSE_ACCURATE=1  keep an accurate JSON that exists (the slow part:
 #                 about 50 s of CPU per specimen at 1 cm); its .meta says
@@ -57,7 +59,7 @@ cd "$(dirname "$0")/.."
 DRAPE=${DRAPE_BIN:-./drape}
 OUT=docs/performance/ensemble
 N_REF=${BENCH_REF_SPECIMENS:-16}
-N_FAST=${BENCH_FAST_SPECIMENS:-32}
+N_FAST=${BENCH_FAST_SPECIMENS:-128}
 JOBS=${BENCH_JOBS:-2}
 CASES=${BENCH_CASES:-"cotton-1cm cotton-poly-1cm jacket-1cm tablecloth-1cm cotton-2cm table-2cm"}
 SPACINGS=${BENCH_SPACINGS-"2cm 1cm 0.75cm 0.5cm"}
