@@ -217,9 +217,6 @@ static void fabric_warn(void *ctx, const drape_error *w)
 
 /* ---- methods ----------------------------------------------------------------- */
 
-/* The static method: minimise E_pot from the initial state and present the
- * result as a run (status equilibrium or failed, no time, no integrator
- * statistics).  Frames: the final state only.  Returns 1 on success. */
 /* The fall method's numbers (time 0: the static method). */
 typedef struct fall_params {
     double time, step;           /* s: least duration, fixed step */
@@ -228,6 +225,9 @@ typedef struct fall_params {
     double tol;                  /* m: > 0 error-controlled (--fall-tol) */
 } fall_params;
 
+/* The static method: minimise E_pot from the initial state and present the
+ * result as a run (status equilibrium or failed, no time, no integrator
+ * statistics).  Frames: the final state only.  Returns 1 on success. */
 static int run_static(drape_model *m, const drape_fabric *f, const fall_params *fp, run_ctx *rc,
                       drape_sim_result *res,
                       drape_equilibrium_result *er, drape_error *err)

@@ -322,17 +322,14 @@ int drape_cli_run(int argc, char **argv)
                 return usage_error("--fall-tol: must not be negative, got %s%s", optarg, "");
             break;
         case O_FALLFOLD:
-            if (parse_quantity("--fall-fold-time", optarg, DRAPE_DIM_TIME, &ra.fall_fold_time))
-                return 2;
-            if (!(ra.fall_fold_time >= 0) || !isfinite(ra.fall_fold_time))
-                return usage_error("--fall-fold-time: must be a time >= 0, got %s%s", optarg, "");
+        case O_DAMPSHEAR: { /* times >= 0 */
+            const char *name = c == O_FALLFOLD ? "--fall-fold-time" : "--damping-shear";
+            double *v = c == O_FALLFOLD ? &ra.fall_fold_time : &ra.damping_shear;
+            if (parse_quantity(name, optarg, DRAPE_DIM_TIME, v)) return 2;
+            if (!(*v >= 0) || !isfinite(*v))
+                return usage_error("%s: must be a time >= 0, got %s", name, optarg);
             break;
-        case O_DAMPSHEAR:
-            if (parse_quantity("--damping-shear", optarg, DRAPE_DIM_TIME, &ra.damping_shear))
-                return 2;
-            if (!(ra.damping_shear >= 0) || !isfinite(ra.damping_shear))
-                return usage_error("--damping-shear: must be a time >= 0, got %s%s", optarg, "");
-            break;
+        }
         case O_FALLTIME:
         case O_FALLSTEP: {
             const char *name = c == O_FALLTIME ? "--fall-time" : "--fall-step";

@@ -96,7 +96,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     const double T = o->dyn_time, ke_frac = o->dyn_ke_frac, tol = o->dyn_tol;
     const int adaptive = tol > 0.0;
     /* the fixed step's fold phase: [0, T_fold) at dyn_dt_fold */
-    const double T_fold = adaptive ? 0.0 : o->dyn_time_fold;
+    const double T_fold = adaptive ? 0.0 : fmin(o->dyn_time_fold, T);
     int folding = T_fold > 0.0;
     double h = adaptive ? 0.25 * o->dyn_dt : folding ? o->dyn_dt_fold : o->dyn_dt;
     double h_swing = adaptive ? 0.0 : o->dyn_dt_swing;
@@ -139,7 +139,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
          * if it raises the total energy (it can pump energy into folds
          * that are forming: measured on the table scene), and the fall
          * goes on at the fold step */
-        if (folding && t >= fmin(T_fold, T) * (1.0 - 1e-12)) {
+        if (folding && t >= T_fold * (1.0 - 1e-12)) {
             folding = 0;
             h_fall = h;
             h = o->dyn_dt * (h / o->dyn_dt_fold);
@@ -163,7 +163,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             swinging = 1;
         }
         if (o->stop && *o->stop) { rc = 2; break; }
-        double rem = (folding ? fmin(T_fold, T) : extend ? T_max : T) - t;
+        double rem = (folding ? T_fold : extend ? T_max : T) - t;
         /* a whole step when the rest is h but for rounding: no BDF1
          * restart */
         double hs = rem > h * (1.0 - 1e-9) ? h : rem;

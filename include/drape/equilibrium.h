@@ -71,9 +71,12 @@ typedef struct drape_equilibrium_opts {
                             off (default) */
     double dyn_dt;       /* s: its fixed step (needed when dyn_time > 0) */
     double dyn_time_fold;/* s: the first part of the fixed-step dynamics
-                            (while the folds form), at the step dyn_dt_fold,
-                            then dyn_dt from a BDF1 step; 0 = none (default).
-                            Not used with dyn_tol > 0 */
+                            (while the folds form, at most dyn_time), at the
+                            step dyn_dt_fold, then dyn_dt (its first step a
+                            variable-step BDF2 one; refused like the swing's
+                            long step if it raises the total energy, the
+                            dynamics then going on at dyn_dt_fold); 0 = none
+                            (default).  Not used with dyn_tol > 0 */
     double dyn_dt_fold;  /* s: that step (needed when dyn_time_fold > 0) */
     double dyn_ke_frac;  /* > 0: after dyn_time the dynamics go on while the
                             kinetic energy exceeds this fraction of its
