@@ -106,7 +106,10 @@
  * with coarser amalgamation than CHOLMOD's default (nrelax 4, 16, 48,
  * zrelax 0.8, 0.1, 0.05): each supernode costs a BLAS call and an OpenMP
  * region, and libgomp ends every region with a futex call even in one
- * thread (main.c, limit_openmp).  Measured with OMP_THREAD_LIMIT=1 (drape
+ * thread (since the eighteenth session drape's executable runs the regions
+ * in the calling thread instead: main.c, GOMP_parallel; the figures here
+ * are from before, when the regions cost 15-20 % more at 1 cm and coarser
+ * amalgamation saved more).  Measured with OMP_THREAD_LIMIT=1 (drape
  * run --specimens 1, seed 1, least CPU of 3; docs/performance.md, "The
  * fall's factorisation"): simplicial / default supernodal / these
  * settings, Cusick 2 cm (324 unknowns) 0.27 / 0.44 / 0.36 s, 1.5 cm (612)

@@ -55,7 +55,8 @@ static const char usage_text[] =
     "\n"
     "Threads: drape runs in one thread (ensembles and batches run processes\n"
     "in parallel, -j); it sets OMP_THREAD_LIMIT=1 for CHOLMOD's OpenMP loops\n"
-    "unless the environment sets it.\n"
+    "unless the environment sets it; with the limit at 1 it runs them in the\n"
+    "calling thread, with another it gives them to libgomp's threads.\n"
     "\n"
     "Exit status:\n"
     "  0    success\n"
@@ -120,9 +121,46 @@ static void limit_openmp(char **argv)
     execv("/proc/self/exe", argv);
 }
 
+/* OpenMP regions in the calling thread.  Even with the thread limit at 1,
+ * libgomp opens a team of one for every OpenMP region and closes it with a
+ * futex wake-up: one system call per region, about 220 per supernodal
+ * factorisation of the 1 cm fall's matrix (138,000 in a default specimen,
+ * `strace -c`), 20 % of the specimen's CPU on this virtual machine (8
+ * specimens, three runs each way: 9.6 against 12.0 CPU s; the same results
+ * bit for bit; docs/performance.md, "OpenMP regions in one thread").  GCC
+ * compiles `#pragma omp parallel` (with `for`, static schedule, as in
+ * CHOLMOD) into a call of GOMP_parallel, libgomp's entry point since GCC
+ * 4.9, with the region's body outlined as fn; drape defines GOMP_parallel,
+ * and the dynamic linker binds CHOLMOD's calls to the executable's
+ * definition.  With the limit at 1 it runs fn in the calling thread, which
+ * is what a team of one does: the outlined body splits its loop by
+ * omp_get_num_threads() and omp_get_thread_num(), 1 and 0 outside a
+ * region.  With another limit (the caller's OMP_THREAD_LIMIT) it hands the
+ * region to libgomp.  Only drape's executable defines it (the tests link
+ * libdrape.a with libgomp's own; test_openmp_inline compares the two). */
+void GOMP_parallel(void (*fn)(void *), void *data, unsigned num_threads, unsigned flags);
+static void (*gomp_parallel_next)(void (*)(void *), void *, unsigned, unsigned);
+static int omp_inline = 1;
+
+void GOMP_parallel(void (*fn)(void *), void *data, unsigned num_threads, unsigned flags)
+{
+    if (!omp_inline && gomp_parallel_next) gomp_parallel_next(fn, data, num_threads, flags);
+    else fn(data);
+}
+
+/* After limit_openmp: inline unless the caller set another limit. */
+static void openmp_inline(void)
+{
+    const char *lim = getenv("OMP_THREAD_LIMIT");
+    omp_inline = lim && strcmp(lim, "1") == 0;
+    void *sym = dlsym(RTLD_NEXT, "GOMP_parallel");
+    if (sym) memcpy(&gomp_parallel_next, &sym, sizeof gomp_parallel_next);
+}
+
 int main(int argc, char **argv)
 {
     limit_openmp(argv);
+    openmp_inline();
     gsl_set_error_handler_off(); /* GSL's default handler aborts */
     single_threaded();
 

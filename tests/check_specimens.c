@@ -244,6 +244,38 @@ END_TEST
  * loose one; 0 is the fixed step: fall_time / fall_step steps), the result
  * says which (fall_tol_m, fall_steps), and bad values are refused with
  * the file, line and key or exit 2. */
+/* drape runs CHOLMOD's OpenMP regions in the calling thread when the
+ * thread limit is 1 (main.c, GOMP_parallel); with another limit libgomp
+ * runs them in its threads.  A 1.5 cm fall (612 unknowns: factorised
+ * supernodally, in OpenMP regions) must come out the same bit for bit:
+ * the regions only zero, scatter and assemble, each entry in one thread. */
+START_TEST(test_openmp_inline)
+{
+    const char *keep = getenv("OMP_THREAD_LIMIT");
+    char saved[64] = "";
+    if (keep) snprintf(saved, sizeof saved, "%s", keep);
+    const char *keys[] = {"dc", "factorizations", "iterations", "fall_steps",
+                          "energy_total_end_J", "max_force_rel", "r_min_m"};
+    double v[2][sizeof keys / sizeof keys[0]];
+    for (int k = 0; k < 2; k++) {
+        ck_assert_int_eq(setenv("OMP_THREAD_LIMIT", k == 0 ? "1" : "2", 1), 0);
+        int st = tu_run_drape("run -q scenes/cusick.yaml --spacing 1.5cm --specimens 1 --seed 3",
+                              out, CAP, err, CAP);
+        ck_assert_msg(st == 0, "%s", err);
+        json_object *o = json_tokener_parse(out);
+        ck_assert_msg(o != NULL, "%s", out);
+        for (size_t j = 0; j < sizeof keys / sizeof keys[0]; j++) v[k][j] = jnum(o, keys[j]);
+        json_object_put(o);
+    }
+    if (keep) setenv("OMP_THREAD_LIMIT", saved, 1);
+    else unsetenv("OMP_THREAD_LIMIT");
+    ck_assert(v[0][1] > 100.0); /* a fall was factorised */
+    for (size_t j = 0; j < sizeof keys / sizeof keys[0]; j++)
+        ck_assert_msg(v[0][j] == v[1][j], "%s: %.17g in one thread, %.17g in libgomp's",
+                      keys[j], v[0][j], v[1][j]);
+}
+END_TEST
+
 START_TEST(test_fall_tol_keys)
 {
     char args[4096], text[4096], cwd[1024];
@@ -479,6 +511,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_ensemble_failures);
     tcase_add_test(tc, test_scene_keys);
     tcase_add_test(tc, test_fall_tol_keys);
+    tcase_add_test(tc, test_openmp_inline);
     tcase_add_test(tc, test_fall_energy_balance);
     tcase_add_test(tc, test_compare_distributions);
     tcase_add_test(tc, test_bias_warnings_with_term);
