@@ -19,7 +19,8 @@
 # the tables between the markers "ensemble-bench" in docs/performance.md.
 #
 # Environment:
-#   BENCH_CASES   cases to run (default: all; see case_args)
+#   BENCH_CASES   cases to run (default: all; see case_args; " ": none, e.g.
+#                 for the spacing study alone)
 #   BENCH_REF_SPECIMENS, BENCH_FAST_SPECIMENS   (16, 128: a fall specimen
 #                 costs about a second, and with 32 its own interval was as
 #                 wide as the reference's; seventeenth session)
@@ -33,7 +34,8 @@
 #   BENCH_SPACING_SPECIMENS  specimens per spacing (16; at 0.5 cm a specimen
 #                 takes 10-80 s of CPU)
 #   BENCH_TABLES_ONLY=1  only rebuild the tables from the JSON files there
-#                 (stamped with the commits in the fall ensembles' .meta files)
+#   (the tables are stamped with the commits in the fall ensembles' .meta
+#   files, whatever this run made)
 #   BENCH_DAMPING_SHEAR  a shear damping for every run (`--damping-shear`,
 #                 e.g. 0.5ms; default none: MODEL.md's dissipation). Its
 #                 ensembles go to docs/performance/ensemble/damping-shear-VALUE/
@@ -125,12 +127,6 @@ calibrate() {
 }
 
 [ "${BENCH_TABLES_ONLY:-0}" = 1 ] && CASES="" && SPACINGS_RUN="" || SPACINGS_RUN=$SPACINGS
-if [ "${BENCH_TABLES_ONLY:-0}" = 1 ]; then
-    # the tables' stamp names the commits that ran the fall ensembles (their
-    # .meta files), not the checkout that only rebuilt the tables
-    RUNS=$(sed -n 's/^commit: //p' "$OUT"/*-fall.meta 2>/dev/null | sort -u | paste -sd, -)
-    COMMIT="${RUNS:-unknown}; tables rebuilt with $COMMIT"
-fi
 for c in $CASES; do
     a=$(case_args "$c")
     # shellcheck disable=SC2086
@@ -184,6 +180,13 @@ for h in $SPACINGS_RUN; do
     # shellcheck disable=SC2046
     run "spacing-$h-fall" $(case_args "spacing-$h") --specimens "$N_SPACING" -j "$JOBS"
 done
+
+# the tables' stamp names the commits that ran the fall ensembles in them
+# (their .meta files), not only this checkout: a run of some cases or only
+# the spacings (BENCH_CASES, BENCH_SPACINGS) or none (BENCH_TABLES_ONLY)
+# rewrites tables whose other rows came from earlier commits
+RUNS=$(sed -n 's/^commit: //p' "$OUT"/*-fall.meta 2>/dev/null | sort -u | paste -sd, -)
+[ "$RUNS" = "$COMMIT" ] || COMMIT="${RUNS:-unknown}; tables written with $COMMIT"
 
 python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS_TABLE" "$MARK" "$DAMP" <<'EOF'
 import json, math, os, re, sys
