@@ -34,8 +34,8 @@
 #   BENCH_SPACING_SPECIMENS  specimens per spacing (16; at 0.5 cm a specimen
 #                 takes 10-80 s of CPU)
 #   BENCH_TABLES_ONLY=1  only rebuild the tables from the JSON files there
-#   (the tables are stamped with the commits in the fall ensembles' .meta
-#   files, whatever this run made)
+#                 (in every mode the tables are stamped with the commits in
+#                 the fall ensembles' .meta files, whatever this run made)
 #   BENCH_DAMPING_SHEAR  a shear damping for every run (`--damping-shear`,
 #                 e.g. 0.5ms; default none: MODEL.md's dissipation). Its
 #                 ensembles go to docs/performance/ensemble/damping-shear-VALUE/

@@ -125,26 +125,26 @@ static void limit_openmp(char **argv)
  * libgomp opens a team of one for every OpenMP region and closes it with a
  * futex wake-up: one system call per region, about 220 per supernodal
  * factorisation of the 1 cm fall's matrix (138,000 in a default specimen,
- * `strace -c`), 20 % of the specimen's CPU on this virtual machine (8
- * specimens, three runs each way: 9.6 against 12.0 CPU s; the same results
- * bit for bit; docs/performance.md, "OpenMP regions in one thread").  GCC
- * compiles `#pragma omp parallel` (with `for`, static schedule, as in
- * CHOLMOD) into a call of GOMP_parallel, libgomp's entry point since GCC
- * 4.9, with the region's body outlined as fn; drape defines GOMP_parallel,
- * and the dynamic linker binds CHOLMOD's calls to the executable's
- * definition.  With the limit at 1 it runs fn in the calling thread, which
- * is what a team of one does: the outlined body splits its loop by
- * omp_get_num_threads() and omp_get_thread_num(), 1 and 0 outside a
- * region.  With another limit (the caller's OMP_THREAD_LIMIT) it hands the
- * region to libgomp.  Only drape's executable defines it (the tests link
- * libdrape.a with libgomp's own; test_openmp_inline compares the two). */
+ * `strace -c`), 14-22 % of a specimen's CPU at 1 cm and finer on this
+ * virtual machine (the same results bit for bit; docs/performance.md,
+ * "OpenMP regions in one thread").  GCC compiles `#pragma omp parallel`
+ * (with `for`, static schedule, as in CHOLMOD) into a call of
+ * GOMP_parallel, libgomp's entry point since GCC 4.9, with the region's
+ * body outlined as fn; drape defines GOMP_parallel, and the dynamic linker
+ * binds CHOLMOD's calls to the executable's definition.  With the limit at
+ * 1 it runs fn in the calling thread, which is what a team of one does:
+ * the outlined body splits its loop by omp_get_num_threads() and
+ * omp_get_thread_num(), 1 and 0 outside a region.  With another limit (the
+ * caller's OMP_THREAD_LIMIT) it hands the region to libgomp's.  Only
+ * drape's executable defines it (the tests link libdrape.a with libgomp's
+ * own; test_openmp_inline compares the two). */
 void GOMP_parallel(void (*fn)(void *), void *data, unsigned num_threads, unsigned flags);
+/* libgomp's GOMP_parallel when the regions go to its threads, else NULL */
 static void (*gomp_parallel_next)(void (*)(void *), void *, unsigned, unsigned);
-static int omp_inline = 1;
 
 void GOMP_parallel(void (*fn)(void *), void *data, unsigned num_threads, unsigned flags)
 {
-    if (!omp_inline && gomp_parallel_next) gomp_parallel_next(fn, data, num_threads, flags);
+    if (gomp_parallel_next) gomp_parallel_next(fn, data, num_threads, flags);
     else fn(data);
 }
 
@@ -152,7 +152,7 @@ void GOMP_parallel(void (*fn)(void *), void *data, unsigned num_threads, unsigne
 static void openmp_inline(void)
 {
     const char *lim = getenv("OMP_THREAD_LIMIT");
-    omp_inline = lim && strcmp(lim, "1") == 0;
+    if (lim && strcmp(lim, "1") == 0) return;
     void *sym = dlsym(RTLD_NEXT, "GOMP_parallel");
     if (sym) memcpy(&gomp_parallel_next, &sym, sizeof gomp_parallel_next);
 }

@@ -233,17 +233,6 @@ START_TEST(test_scene_keys)
 }
 END_TEST
 
-/* `drape compare` of two hand-written results of 24 specimens: the same
- * node histograms and DC means 0.005 apart, but one sample in two rest
- * states (0.40, 0.45) and the other in one between them (0.43).  dc_diff by hand; the exact test of
- * equal histograms is 1; the DC distributions are told apart by the
- * Kolmogorov-Smirnov test (p_dc_dist, the value of the library's test of
- * the same samples) where Welch's test of the means is not significant. */
-/* The fall's error control (eleventh session): solver.fall_tol and
- * --fall-tol reach the fall (a tighter tolerance takes more steps than a
- * loose one; 0 is the fixed step: fall_time / fall_step steps), the result
- * says which (fall_tol_m, fall_steps), and bad values are refused with
- * the file, line and key or exit 2. */
 /* drape runs CHOLMOD's OpenMP regions in the calling thread when the
  * thread limit is 1 (main.c, GOMP_parallel); with another limit libgomp
  * runs them in its threads.  A 1.5 cm fall (612 unknowns: factorised
@@ -276,6 +265,11 @@ START_TEST(test_openmp_inline)
 }
 END_TEST
 
+/* The fall's error control (eleventh session): solver.fall_tol and
+ * --fall-tol reach the fall (a tighter tolerance takes more steps than a
+ * loose one; 0 is the fixed step: fall_time / fall_step steps), the result
+ * says which (fall_tol_m, fall_steps), and bad values are refused with
+ * the file, line and key or exit 2. */
 START_TEST(test_fall_tol_keys)
 {
     char args[4096], text[4096], cwd[1024];
@@ -446,6 +440,12 @@ START_TEST(test_fall_energy_balance)
 }
 END_TEST
 
+/* `drape compare` of two hand-written results of 24 specimens: the same
+ * node histograms and DC means 0.005 apart, but one sample in two rest
+ * states (0.40, 0.45) and the other in one between them (0.43).  dc_diff by hand; the exact test of
+ * equal histograms is 1; the DC distributions are told apart by the
+ * Kolmogorov-Smirnov test (p_dc_dist, the value of the library's test of
+ * the same samples) where Welch's test of the means is not significant. */
 START_TEST(test_compare_distributions)
 {
     char a[4096] = "{\"specimens\": [", b[4096] = "{\"specimens\": [";
