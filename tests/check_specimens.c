@@ -248,7 +248,7 @@ START_TEST(test_openmp_inline)
     double v[2][sizeof keys / sizeof keys[0]];
     for (int k = 0; k < 2; k++) {
         ck_assert_int_eq(setenv("OMP_THREAD_LIMIT", k == 0 ? "1" : "2", 1), 0);
-        int st = tu_run_drape("run -q scenes/cusick.yaml --spacing 1.5cm --specimens 1 --seed 3",
+        int st = tu_run_drape("run -q ../scenes/cusick.yaml --spacing 1.5cm --specimens 1 --seed 3",
                               out, CAP, err, CAP);
         ck_assert_msg(st == 0, "%s", err);
         json_object *o = json_tokener_parse(out);
