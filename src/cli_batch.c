@@ -54,7 +54,7 @@ static const char batch_usage[] =
     "  --t-max T, --max-steps N, --strain-limit X, --method fall|dynamic|static,\n"
     "  --linear-solver NAME, --max-order N, --specimens N, --seed N,\n"
     "  --fall-time T, --fall-step T, --fall-swing X, --fall-tol L,\n"
-    "  --fall-fold-time T, --terms LIST,\n"
+    "  --fall-fold-time T, --fall-retry T, --terms LIST,\n"
     "  --damping-shear T (each fabric's specimens run one after another in its\n"
     "  process; the results carry the ensemble columns dc_sd,\n"
     "  dc_ci95, dc_mode, nodes_hist, specimens: docs/ensemble.md)\n"
@@ -579,7 +579,7 @@ int drape_cli_batch(int argc, char **argv)
     enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
            O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
            O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_FALLSWING, O_TERMS,
-           O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD };
+           O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD, O_FALLRETRY };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
@@ -603,6 +603,7 @@ int drape_cli_batch(int argc, char **argv)
         {"fall-swing", required_argument, NULL, O_FALLSWING},
         {"fall-tol", required_argument, NULL, O_FALLTOL},
         {"fall-fold-time", required_argument, NULL, O_FALLFOLD},
+        {"fall-retry", required_argument, NULL, O_FALLRETRY},
         {"damping-shear", required_argument, NULL, O_DAMPSHEAR},
         {"terms", required_argument, NULL, O_TERMS},
         {"quiet", no_argument, NULL, 'q'},
@@ -680,7 +681,8 @@ int drape_cli_batch(int argc, char **argv)
             if (check_quantity(name, optarg, DRAPE_DIM_LENGTH, 0)) return 2;
             break;
         case O_FALLFOLD:
-            name = "--fall-fold-time";
+        case O_FALLRETRY:
+            name = c == O_FALLFOLD ? "--fall-fold-time" : "--fall-retry";
             if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0)) return 2;
             break;
         case O_DAMPSHEAR:

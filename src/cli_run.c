@@ -82,7 +82,9 @@ const char *const drape_cli_run_keys[] = {
     /* sixteenth session: energy the fall's integrator created */
     "energy_gain_J", "fall_redone",
     /* seventeenth session: the fall's fold phase at half its step */
-    "fall_fold_time_s", "fall_fold_step_s", NULL};
+    "fall_fold_time_s", "fall_fold_step_s",
+    /* nineteenth session: a refused longer step of the fall tried again */
+    "fall_retry_s", "fall_refused", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -222,6 +224,7 @@ typedef struct fall_params {
     double time, step;           /* s: least duration, fixed step */
     double fold_time, fold_step; /* s: the fold phase (0, 0: none) */
     double swing;                /* fraction of the peak kinetic energy */
+    double retry;                /* s: a refused longer step tried again */
     double tol;                  /* m: > 0 error-controlled (--fall-tol) */
 } fall_params;
 
@@ -243,6 +246,7 @@ static int run_static(drape_model *m, const drape_fabric *f, const fall_params *
     eo.dyn_ke_frac = fp->swing; /* and on while the cloth still swings */
     eo.dyn_time_max = DRAPE_FALL_TIME_MAX * fall_time;
     eo.dyn_dt_swing = DRAPE_FALL_SWING_STEP * fp->step; /* at a longer step */
+    eo.dyn_retry = fp->retry; /* a longer step refused is tried again */
     eo.dyn_tol = fall_tol; /* or the step chosen by its error (--fall-tol) */
     /* a fixed-step fall that gains energy falls again, error-controlled */
     eo.dyn_redo_tol = fall_tol > 0.0 ? 0.0 : DRAPE_FALL_REDO_TOL;
@@ -371,6 +375,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->fall_swing >= 0) s.fall_swing = ra->fall_swing;
     if (ra->fall_tol >= 0) s.fall_tol = ra->fall_tol;
     if (ra->fall_fold_time >= 0) s.fall_fold_time = ra->fall_fold_time;
+    if (ra->fall_retry >= 0) s.fall_retry = ra->fall_retry;
     if (ra->damping_shear >= 0) s.damping_shear = ra->damping_shear;
     if (ri && ri->damping_shear >= 0) s.damping_shear = ri->damping_shear; /* what ran */
     if (ra->substeps > 0) s.substeps = ra->substeps;
@@ -392,12 +397,15 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     /* animate: the dynamic run with the fixed-step integrator */
     if (method == DRAPE_METHOD_ANIMATE) snprintf(s.integrator, sizeof s.integrator, "animate");
     int method_static = method == DRAPE_METHOD_STATIC || method == DRAPE_METHOD_FALL;
-    fall_params fp = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    fall_params fp = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
     if (method == DRAPE_METHOD_FALL) {
         drape_scene_fall_params(&s, &fp.time, &fp.step);
         fp.tol = s.fall_tol;
         /* the fold phase belongs to the fixed step */
-        if (!(fp.tol > 0.0)) drape_scene_fall_fold(&s, fp.time, fp.step, &fp.fold_time, &fp.fold_step);
+        if (!(fp.tol > 0.0)) {
+            drape_scene_fall_fold(&s, fp.time, fp.step, &fp.fold_time, &fp.fold_step);
+            fp.retry = drape_scene_fall_retry(&s, fp.time); /* so is the retry */
+        }
     }
     fp.swing = drape_scene_fall_swing(&s);
     double fall_time = fp.time, fall_step = fp.step;
@@ -653,6 +661,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     }
     drape_cli_result_num(&r, "fall_fold_time_s", fp.fold_time > 0.0 ? fp.fold_time : NAN);
     drape_cli_result_num(&r, "fall_fold_step_s", fp.fold_time > 0.0 ? fp.fold_step : NAN);
+    drape_cli_result_num(&r, "fall_retry_s", fp.retry > 0.0 ? fp.retry : NAN);
+    drape_cli_result_int(&r, "fall_refused",
+                         method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_refused : NAN);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

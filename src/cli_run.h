@@ -26,6 +26,7 @@ typedef struct run_args {
     double fall_swing;        /* --fall-swing; < 0 = the scene's */
     double fall_tol;          /* --fall-tol, m; < 0 = the scene's */
     double fall_fold_time;    /* --fall-fold-time, s; < 0 = the scene's */
+    double fall_retry;        /* --fall-retry, s; < 0 = the scene's */
     double damping_shear;     /* --damping-shear, s; < 0 = the scene's */
     int substeps;             /* --substeps (animate); 0 = the scene's */
     unsigned terms;           /* --terms: DRAPE_TERM_* mask; 0 = the scene's */

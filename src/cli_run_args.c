@@ -101,6 +101,11 @@ static const char run_usage[] =
     "                           solver.fall_fold_time; default half the fall\n"
     "                           time; 0 = none); result keys fall_fold_time_s,\n"
     "                           fall_fold_step_s\n"
+    "  --fall-retry T           a longer step of the fall refused for raising\n"
+    "                           its total energy is tried again T later (scene:\n"
+    "                           solver.fall_retry; default a tenth of the fall\n"
+    "                           time, one pendulum time; 0 = never); result keys\n"
+    "                           fall_retry_s, fall_refused\n"
     "  --fall-swing X           the fall goes on past --fall-time while the\n"
     "                           cloth still swings, at twice the fall step: while\n"
     "                           its kinetic energy over the last fifth of the fall\n"
@@ -194,7 +199,7 @@ int drape_cli_run(int argc, char **argv)
     enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
            O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
            O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
-           O_TERMS, O_FALLSWING, O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD };
+           O_TERMS, O_FALLSWING, O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD, O_FALLRETRY };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_INTEGRATOR},
@@ -217,6 +222,7 @@ int drape_cli_run(int argc, char **argv)
         {"fall-swing", required_argument, NULL, O_FALLSWING},
         {"fall-tol", required_argument, NULL, O_FALLTOL},
         {"fall-fold-time", required_argument, NULL, O_FALLFOLD},
+        {"fall-retry", required_argument, NULL, O_FALLRETRY},
         {"damping-shear", required_argument, NULL, O_DAMPSHEAR},
         {"fall-time", required_argument, NULL, O_FALLTIME},
         {"fall-step", required_argument, NULL, O_FALLSTEP},
@@ -237,6 +243,7 @@ int drape_cli_run(int argc, char **argv)
     ra.fall_swing = -1.0;
     ra.fall_tol = -1.0;
     ra.fall_fold_time = -1.0;
+    ra.fall_retry = -1.0;
     ra.damping_shear = -1.0;
     ra.jobs = 0; /* one per core */
     while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
@@ -322,9 +329,14 @@ int drape_cli_run(int argc, char **argv)
                 return usage_error("--fall-tol: must not be negative, got %s%s", optarg, "");
             break;
         case O_FALLFOLD:
+        case O_FALLRETRY:
         case O_DAMPSHEAR: { /* times >= 0 */
-            const char *name = c == O_FALLFOLD ? "--fall-fold-time" : "--damping-shear";
-            double *v = c == O_FALLFOLD ? &ra.fall_fold_time : &ra.damping_shear;
+            const char *name = c == O_FALLFOLD    ? "--fall-fold-time"
+                               : c == O_FALLRETRY ? "--fall-retry"
+                                                  : "--damping-shear";
+            double *v = c == O_FALLFOLD    ? &ra.fall_fold_time
+                        : c == O_FALLRETRY ? &ra.fall_retry
+                                           : &ra.damping_shear;
             if (parse_quantity(name, optarg, DRAPE_DIM_TIME, v)) return 2;
             if (!(*v >= 0) || !isfinite(*v))
                 return usage_error("%s: must be a time >= 0, got %s", name, optarg);

@@ -640,6 +640,7 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         !(o.dyn_ke_frac >= 0.0 && o.dyn_ke_frac < 1.0) ||
         !(o.dyn_time_max >= 0.0) || !isfinite(o.dyn_time_max) ||
         !(o.dyn_dt_swing >= 0.0) || !isfinite(o.dyn_dt_swing) ||
+        !(o.dyn_retry >= 0.0) || !isfinite(o.dyn_retry) ||
         !(o.dyn_tol >= 0.0) || !isfinite(o.dyn_tol) ||
         !(o.dyn_redo_tol >= 0.0) || !isfinite(o.dyn_redo_tol) ||
         !(o.dt_growth_max >= 1.0) || !(o.dt_growth_min >= 1.0) ||

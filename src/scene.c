@@ -477,13 +477,14 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
     static const char *const keys[] = {"integrator", "rtol", "atol",
                                        "max_order", "method", "fall_time",
                                        "fall_step", "substeps", "fall_swing", "fall_tol",
-                                       "fall_fold_time", NULL};
+                                       "fall_fold_time", "fall_retry", NULL};
     const drape_ynode *m = drape_ynode_get(root, "solver", NULL), *v;
     snprintf(s->integrator, sizeof s->integrator, "%s", "auto");
     s->rtol = SCENE_RTOL;
     s->atol = SCENE_ATOL;
     s->fall_swing = -1.0; /* DRAPE_FALL_SWING */
     s->fall_fold_time = -1.0; /* DRAPE_FALL_FOLD_TIME of the fall time */
+    s->fall_retry = -1.0;     /* DRAPE_FALL_RETRY of the fall time */
     if (!m) return 0;
     if (drape_yread_want_map(c, m, "solver") ||
         drape_ynode_check_keys(c->doc, m, "solver", keys, c->err))
@@ -520,6 +521,10 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
     if ((v = drape_ynode_get(m, "fall_fold_time", NULL)) != NULL &&
         drape_yread_quantity(c, v, "solver.fall_fold_time", DRAPE_DIM_TIME, "time",
                              DRAPE_YREAD_NONNEGATIVE, &s->fall_fold_time))
+        return -1;
+    if ((v = drape_ynode_get(m, "fall_retry", NULL)) != NULL &&
+        drape_yread_quantity(c, v, "solver.fall_retry", DRAPE_DIM_TIME, "time",
+                             DRAPE_YREAD_NONNEGATIVE, &s->fall_retry))
         return -1;
     if ((v = drape_ynode_get(m, "fall_tol", NULL)) != NULL &&
         drape_yread_quantity(c, v, "solver.fall_tol", DRAPE_DIM_LENGTH, "length",

@@ -86,6 +86,13 @@ typedef struct drape_equilibrium_opts {
     double dyn_dt_swing; /* s: the step of the dynamics past dyn_time (the
                             slow swing after the folds have formed); 0 =
                             dyn_dt */
+    double dyn_retry;    /* s; > 0: a longer step refused because it raised
+                            the total energy (the swing's, or dyn_dt after
+                            the fold phase) is tried again this long after
+                            the refusal, as often as it is refused; its
+                            guard then counts from the lowest total energy
+                            since the first change of step.  0 = the
+                            dynamics stay at the shorter step (default) */
     double dyn_tol;      /* m; > 0: the step of the dynamics is chosen by
                             their local error in position instead (the
                             largest particle's estimate at most dyn_tol per
@@ -149,7 +156,9 @@ typedef struct drape_equilibrium_result {
     int dyn_redone;       /* 1: the fixed-step fall gained energy and the
                              dynamics were done again with dyn_redo_tol */
     int dyn_refused;      /* steps refused because the total energy rose:
-                             swing steps at dyn_dt_swing (then dyn_dt on),
+                             swing steps at dyn_dt_swing (then dyn_dt on,
+                             until dyn_retry), dyn_dt after the fold phase
+                             (then dyn_dt_fold),
                              or steps of the error-controlled fall (redone
                              at half the step) */
     double dyn_end;       /* s: when the damped dynamics ended */

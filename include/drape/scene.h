@@ -130,6 +130,12 @@ typedef struct drape_scene {
                                       while the folds form, at half the fall
                                       step; < 0 = DRAPE_FALL_FOLD_TIME of the
                                       fall time, 0 = none */
+    double fall_retry;             /* solver.fall_retry, s (nineteenth
+                                      session): a longer step of the fall
+                                      refused for raising its total energy
+                                      is tried again this long after; < 0 =
+                                      DRAPE_FALL_RETRY of the fall time, 0 =
+                                      never */
     double fall_tol;               /* solver.fall_tol, m (eleventh session): > 0:
                                       the fall's step is chosen by its error
                                       in position (drape_equilibrium_opts.
@@ -238,6 +244,18 @@ void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_
  * when there is none. */
 void drape_scene_fall_fold(const drape_scene *s, double time_s, double step_s,
                            double *fold_time_s, double *fold_step_s);
+
+/* A longer step of the fixed-step fall (the fall step after the fold
+ * phase, the swing's step) that raises the total energy is refused and the
+ * fall goes on at the shorter step; DRAPE_FALL_RETRY t_fall later (one
+ * pendulum time of the skirt) it tries the longer step again.  Without it,
+ * one refusal kept the rest of the fall at the short step: on cotton-poly
+ * and the tablecloth 1.3-1.9 times the steps of a fall without refusals
+ * (docs/ensemble.md, "Trying the longer step again"). */
+#define DRAPE_FALL_RETRY 0.1
+/* The fall's retry time for a fall of time_s (solver.fall_retry or
+ * DRAPE_FALL_RETRY time_s; 0 = never). */
+double drape_scene_fall_retry(const drape_scene *s, double time_s);
 
 /* The fall's swing fraction (solver.fall_swing or DRAPE_FALL_SWING). */
 double drape_scene_fall_swing(const drape_scene *s);
