@@ -404,7 +404,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         /* the fold phase belongs to the fixed step */
         if (!(fp.tol > 0.0)) {
             drape_scene_fall_fold(&s, fp.time, fp.step, &fp.fold_time, &fp.fold_step);
-            fp.retry = drape_scene_fall_retry(&s, fp.time); /* so is the retry */
+            fp.retry = s.fall_retry; /* so is the retry */
         }
     }
     fp.swing = drape_scene_fall_swing(&s);

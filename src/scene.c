@@ -484,7 +484,6 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
     s->atol = SCENE_ATOL;
     s->fall_swing = -1.0; /* DRAPE_FALL_SWING */
     s->fall_fold_time = -1.0; /* DRAPE_FALL_FOLD_TIME of the fall time */
-    s->fall_retry = -1.0;     /* DRAPE_FALL_RETRY of the fall time */
     if (!m) return 0;
     if (drape_yread_want_map(c, m, "solver") ||
         drape_ynode_check_keys(c->doc, m, "solver", keys, c->err))

@@ -217,11 +217,6 @@ void drape_scene_fall_fold(const drape_scene *s, double time_s, double step_s,
     *fold_step_s = t > 0.0 ? DRAPE_FALL_FOLD_STEP * step_s : 0.0;
 }
 
-double drape_scene_fall_retry(const drape_scene *s, double time_s)
-{
-    return s->fall_retry >= 0.0 ? s->fall_retry : DRAPE_FALL_RETRY * time_s;
-}
-
 double drape_scene_fall_swing(const drape_scene *s)
 {
     return s->fall_swing >= 0.0 ? s->fall_swing : DRAPE_FALL_SWING;

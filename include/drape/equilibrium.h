@@ -89,9 +89,10 @@ typedef struct drape_equilibrium_opts {
     double dyn_retry;    /* s; > 0: a longer step refused because it raised
                             the total energy (the swing's, or dyn_dt after
                             the fold phase) is tried again this long after
-                            the refusal, as often as it is refused; its
-                            guard then counts from the lowest total energy
-                            since the first change of step.  0 = the
+                            the refusal, once (a retry refused again leaves
+                            the dynamics at the shorter step); its guard
+                            then counts from the lowest total energy since
+                            the first change of step.  0 = the
                             dynamics stay at the shorter step (default) */
     double dyn_tol;      /* m; > 0: the step of the dynamics is chosen by
                             their local error in position instead (the

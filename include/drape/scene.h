@@ -133,9 +133,13 @@ typedef struct drape_scene {
     double fall_retry;             /* solver.fall_retry, s (nineteenth
                                       session): a longer step of the fall
                                       refused for raising its total energy
-                                      is tried again this long after; < 0 =
-                                      DRAPE_FALL_RETRY of the fall time, 0 =
-                                      never */
+                                      is tried again this long after, once
+                                      (drape_equilibrium_opts.dyn_retry);
+                                      0 = never (default: on the table at 1
+                                      cm the retried steps kept a third of
+                                      the specimens swinging to the longest
+                                      fall, docs/ensemble.md, "Trying the
+                                      longer step again") */
     double fall_tol;               /* solver.fall_tol, m (eleventh session): > 0:
                                       the fall's step is chosen by its error
                                       in position (drape_equilibrium_opts.
@@ -244,18 +248,6 @@ void drape_scene_fall_params(const drape_scene *s, double *time_s, double *step_
  * when there is none. */
 void drape_scene_fall_fold(const drape_scene *s, double time_s, double step_s,
                            double *fold_time_s, double *fold_step_s);
-
-/* A longer step of the fixed-step fall (the fall step after the fold
- * phase, the swing's step) that raises the total energy is refused and the
- * fall goes on at the shorter step; DRAPE_FALL_RETRY t_fall later (one
- * pendulum time of the skirt) it tries the longer step again.  Without it,
- * one refusal kept the rest of the fall at the short step: on cotton-poly
- * and the tablecloth 1.3-1.9 times the steps of a fall without refusals
- * (docs/ensemble.md, "Trying the longer step again"). */
-#define DRAPE_FALL_RETRY 0.1
-/* The fall's retry time for a fall of time_s (solver.fall_retry or
- * DRAPE_FALL_RETRY time_s; 0 = never). */
-double drape_scene_fall_retry(const drape_scene *s, double time_s);
 
 /* The fall's swing fraction (solver.fall_swing or DRAPE_FALL_SWING). */
 double drape_scene_fall_swing(const drape_scene *s);
