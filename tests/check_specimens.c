@@ -27,6 +27,18 @@ static double jnum(json_object *o, const char *key)
     return json_object_get_double(v);
 }
 
+/* The scene text written as name and run is refused (exit 1) with an error
+ * that contains where (the file and line, or the whole message) and key
+ * (NULL: where alone). */
+static void assert_scene_refused(const char *name, const char *text, const char *where,
+                                 const char *key)
+{
+    char args[4096];
+    snprintf(args, sizeof args, "run -q %s", tu_write_file(name, text));
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
+    ck_assert_msg(strstr(err, where) && (!key || strstr(err, key)), "%s", err);
+}
+
 /* Number of nodes matching an XPath expression in the SVG file. */
 static int xpath_count(const char *path, const char *expr)
 {
@@ -213,18 +225,12 @@ START_TEST(test_scene_keys)
     /* bad values name the file, line and key */
     char *q = strstr(text, "specimens: 2");
     memcpy(q, "specimens: 0", 12);
-    scene = tu_write_file("ens-bad.yaml", text);
-    snprintf(args, sizeof args, "run -q %s", scene);
-    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
-    ck_assert_msg(strstr(err, "ens-bad.yaml:7:12: specimens: expected an integer from 1 to 1000"),
-                  "%s", err);
+    assert_scene_refused("ens-bad.yaml", text,
+                         "ens-bad.yaml:7:12: specimens: expected an integer from 1 to 1000", NULL);
     memcpy(q, "specimens: 2", 12);
     q = strstr(text, "method: fall");
     memcpy(q, "method: fast", 12);
-    scene = tu_write_file("ens-bad2.yaml", text);
-    snprintf(args, sizeof args, "run -q %s", scene);
-    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
-    ck_assert_msg(strstr(err, "ens-bad2.yaml:8:") && strstr(err, "solver.method"), "%s", err);
+    assert_scene_refused("ens-bad2.yaml", text, "ens-bad2.yaml:8:", "solver.method");
     /* the command line */
     ck_assert_int_eq(tu_run_drape("run --specimens 0", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("run -j x", out, CAP, err, CAP), 2);
@@ -321,10 +327,7 @@ START_TEST(test_fall_retry)
     /* bad values */
     char *q = strstr(text, "fall_retry: 80 ms");
     memcpy(q, "fall_retry: -1 s ", 17);
-    const char *bad = tu_write_file("retry-bad.yaml", text);
-    snprintf(args, sizeof args, "run -q %s", bad);
-    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
-    ck_assert_msg(strstr(err, "retry-bad.yaml:9:") && strstr(err, "solver.fall_retry"), "%s", err);
+    assert_scene_refused("retry-bad.yaml", text, "retry-bad.yaml:9:", "solver.fall_retry");
     ck_assert_int_eq(tu_run_drape("run --fall-retry x", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("run --fall-retry -1s", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("run --fall-retry 1m", out, CAP, err, CAP), 2);
@@ -410,10 +413,7 @@ START_TEST(test_fall_tol_keys)
         snprintf(text, sizeof text,
                  "scene: cusick\nfabric: %s/../fabrics/cotton-breen.yaml\n"
                  "spacing: 3 cm\nsolver: {fall_tol: %s}\nend: {t_max: 1 s}\n", cwd, bad[k]);
-        const char *scene = tu_write_file("tol-bad.yaml", text);
-        snprintf(args, sizeof args, "run -q %s", scene);
-        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 1);
-        ck_assert_msg(strstr(err, "tol-bad.yaml:4:") && strstr(err, "solver.fall_tol"), "%s", err);
+        assert_scene_refused("tol-bad.yaml", text, "tol-bad.yaml:4:", "solver.fall_tol");
     }
     ck_assert_int_eq(tu_run_drape("run --fall-tol x", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("run --fall-tol -1um", out, CAP, err, CAP), 2);
