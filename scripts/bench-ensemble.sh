@@ -55,7 +55,9 @@
 #                 The same for the scene's own integrator where its
 #                 ensemble exists (CASE-imex-calib).
 #   DRAPE_BIN     the drape binary (./drape)
-# The accurate ensembles take 1-2 hours of CPU in all; the rest minutes.
+# The accurate ensembles take 1-2 hours of CPU in all for the first six
+# cases and about 40 minutes more for the five library cases (16 seeds:
+# 10-70 s per specimen); the fall ensembles about 20 minutes in all.
 set -eu
 cd "$(dirname "$0")/.."
 DRAPE=${DRAPE_BIN:-./drape}
