@@ -56,8 +56,8 @@
 #                 ensemble exists (CASE-imex-calib).
 #   DRAPE_BIN     the drape binary (./drape)
 # The accurate ensembles take 1-2 hours of CPU in all for the first six
-# cases and about 40 minutes more for the five library cases (16 seeds:
-# 10-70 s per specimen); the fall ensembles about 20 minutes in all.
+# cases and about 80 minutes more for the eight library cases (16 seeds:
+# 10-75 s per specimen); the fall ensembles about 30 minutes in all.
 set -eu
 cd "$(dirname "$0")/.."
 DRAPE=${DRAPE_BIN:-./drape}
@@ -67,8 +67,9 @@ N_FAST=${BENCH_FAST_SPECIMENS:-128}
 JOBS=${BENCH_JOBS:-2}
 # the library's other five fabrics at 1 cm (twentieth session): the
 # shipped scene as `drape batch` runs it (the bias term where the fabric
-# has a bias curve), so that every fabric of fabrics/ is measured
-LIBRARY_CASES="denim-1cm blanket-1cm interlock-1cm ponte-1cm cotton-kes-1cm"
+# has a bias curve), so that every fabric of fabrics/ is measured; and
+# the three older *-wang cases in that model too (*-bias-1cm)
+LIBRARY_CASES="denim-1cm blanket-1cm interlock-1cm ponte-1cm cotton-kes-1cm cotton-poly-bias-1cm jacket-bias-1cm tablecloth-bias-1cm"
 ALL_CASES="cotton-1cm cotton-poly-1cm jacket-1cm tablecloth-1cm cotton-2cm table-2cm $LIBRARY_CASES"
 CASES=${BENCH_CASES:-$ALL_CASES}
 SPACINGS=${BENCH_SPACINGS-"2cm 1cm 0.75cm 0.5cm"}
@@ -108,6 +109,9 @@ case_args_model() {
     interlock-1cm) echo "scenes/cusick.yaml --fabric fabrics/interlock-knit-wang.yaml" ;;
     ponte-1cm) echo "scenes/cusick.yaml --fabric fabrics/ponte-roma-knit-wang.yaml" ;;
     cotton-kes-1cm) echo "scenes/cusick.yaml --fabric fabrics/cotton-breen-kes.yaml" ;;
+    cotton-poly-bias-1cm) echo "scenes/cusick.yaml --fabric fabrics/cotton-poly-wang.yaml" ;;
+    jacket-bias-1cm) echo "scenes/cusick.yaml --fabric fabrics/polyester-jacket-wang.yaml" ;;
+    tablecloth-bias-1cm) echo "scenes/cusick.yaml --fabric fabrics/polyester-tablecloth-wang.yaml" ;;
     spacing-*) echo "scenes/cusick.yaml --spacing ${1#spacing-}" ;;
     *) echo "bench-ensemble: unknown case $1" >&2; exit 2 ;;
     esac
@@ -273,7 +277,8 @@ for c in cases:
         "%.4f" % cmp["p_dc_dist"] if cmp.get("p_dc_dist") is not None else "", cmp["cpu_ratio"],
         ratio_cell,
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
-lib = [c for c in cases if c in ("denim-1cm", "blanket-1cm", "interlock-1cm", "ponte-1cm", "cotton-kes-1cm")
+lib = [c for c in cases if c in ("denim-1cm", "blanket-1cm", "interlock-1cm", "ponte-1cm", "cotton-kes-1cm",
+                                  "cotton-poly-bias-1cm", "jacket-bias-1cm", "tablecloth-bias-1cm")
        and load(c + "-compare.json")]
 if lib:
     lines += ["", "Models: cotton-poly, the jacket and the tablecloth in the seed's model (`--terms "
