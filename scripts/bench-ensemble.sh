@@ -204,9 +204,9 @@ done
 RUNS=$(sed -n 's/^commit: //p' "$OUT"/*-fall.meta 2>/dev/null | sort -u | paste -sd, -)
 [ "$RUNS" = "$COMMIT" ] || COMMIT="${RUNS:-unknown}; tables written with $COMMIT"
 
-python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS_TABLE" "$MARK" "$DAMP" "$ALL_CASES" <<'EOF'
+python3 - "$OUT" "$COMMIT" "$N_REF" "$N_FAST" "$SPACINGS_TABLE" "$MARK" "$DAMP" "$ALL_CASES" "$LIBRARY_CASES" <<'EOF'
 import json, math, os, re, sys
-out, commit, n_ref, n_fast, spacings, mark, damp, all_cases = sys.argv[1:9]
+out, commit, n_ref, n_fast, spacings, mark, damp, all_cases, library_cases = sys.argv[1:10]
 def load(name):
     p = os.path.join(out, name)
     return json.load(open(p)) if os.path.exists(p) else None
@@ -277,9 +277,7 @@ for c in cases:
         "%.4f" % cmp["p_dc_dist"] if cmp.get("p_dc_dist") is not None else "", cmp["cpu_ratio"],
         ratio_cell,
         " ".join("yes" if x else "NO" for x in (a_ok, b_ok, c_ok))))
-lib = [c for c in cases if c in ("denim-1cm", "blanket-1cm", "interlock-1cm", "ponte-1cm", "cotton-kes-1cm",
-                                  "cotton-poly-bias-1cm", "jacket-bias-1cm", "tablecloth-bias-1cm")
-       and load(c + "-compare.json")]
+lib = [c for c in library_cases.split() if load(c + "-compare.json")]
 if lib:
     lines += ["", "Models: cotton-poly, the jacket and the tablecloth in the seed's model (`--terms "
               "stretch,bend,shear,gravity`: their references predate the bias term); " +
