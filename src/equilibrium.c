@@ -59,9 +59,8 @@
  *
  * CHOLMOD: the matrices are formed in the model's CSC pattern (full, both
  * triangles, diagonal stored), of which the lower triangle is read.
- * cholmod_l_analyze finds the fill-reducing order once (simplicial up to
- * DRAPE_EQ_SIMPLICIAL_MAX_N unknowns, else supernodal with coarse
- * amalgamation); the triangle CHOLMOD factorises is laid out in that order
+ * cholmod_l_analyze finds the fill-reducing order once (a supernodal
+ * factor with CHOLMOD's own amalgamation); the triangle CHOLMOD factorises is laid out in that order
  * once (work_order), so that cholmod_l_factorize (numeric only, per
  * iteration) need not permute and transpose it; cholmod_l_solve2 with its
  * workspaces kept.  Nothing is allocated inside the loop but what
@@ -102,27 +101,21 @@
 /* (E6): inverse iteration stops when rho changes by less than this. */
 #define DRAPE_EQ_EIG_RTOL 1e-8
 
-/* Unknowns up to which CHOLMOD factorises simplicially; above, supernodal
- * with coarser amalgamation than CHOLMOD's default (nrelax 4, 16, 48,
- * zrelax 0.8, 0.1, 0.05): each supernode costs a BLAS call and an OpenMP
- * region, and libgomp ends every region with a futex call even in one
- * thread (since the eighteenth session drape's executable runs the regions
- * in the calling thread instead: main.c, GOMP_parallel; the figures here
- * are from before, when the regions cost 15-20 % more at 1 cm and coarser
- * amalgamation saved more).  Measured with OMP_THREAD_LIMIT=1 (drape
- * run --specimens 1, seed 1, least CPU of 3; docs/performance.md, "The
- * fall's factorisation"): simplicial / default supernodal / these
- * settings, Cusick 2 cm (324 unknowns) 0.27 / 0.44 / 0.36 s, 1.5 cm (612)
- * 0.50 / - / 0.48 s, 1 cm (1368) 1.52 / 1.51 / 1.15 s, table 2 cm (1800)
- * 2.63 / 2.30 / 1.67 s, Cusick 0.75 cm (2448) 5.72 / 4.56 / 3.34 s; at
- * 0.5 cm (8100) 16.0 against 12.9 ms per factorisation.  (Before the
- * thread limit, supernodal had been slower at 1368: docs/ensemble.md.) */
-#define DRAPE_EQ_SIMPLICIAL_MAX_N 600
-#define DRAPE_EQ_NRELAX_0 8
-#define DRAPE_EQ_NRELAX_1 32
-#define DRAPE_EQ_NRELAX_2 128
-#define DRAPE_EQ_ZRELAX_1 0.5
-#define DRAPE_EQ_ZRELAX_2 0.2
+/* CHOLMOD factorises supernodally at every size, with its own default
+ * amalgamation (nrelax 4, 16, 48; zrelax 0.8, 0.1, 0.05).  From the
+ * fourteenth to the twentieth session drape factorised simplicially up to
+ * 600 unknowns and with coarser supernodes above (nrelax 8, 32, 128;
+ * zrelax 0.5, 0.2), because each supernode opened an OpenMP region whose
+ * end cost a futex call even in one thread.  Since the eighteenth session
+ * drape's executable runs those regions in the calling thread (main.c,
+ * GOMP_parallel), and the coarse supernodes' extra zeros cost more than
+ * the calls they save: CPU per factorisation of the fall, the mean over a
+ * specimen (seed 1), old / these settings, three runs interleaved
+ * (docs/performance.md, "The fall's factorisation with CHOLMOD's own
+ * supernodes"): Cusick 3 cm (156 unknowns) 0.042 / 0.028 ms, 2 cm (324)
+ * 0.130-0.131 / 0.074-0.079 ms, 1 cm (1368) 0.62-0.64 / 0.50-0.54 ms,
+ * table 2 cm (1800) 0.99-1.02 / 0.82-0.84 ms, table 1 cm 7.7-9.4 /
+ * 5.9-8.2 ms. */
 #define PARTS_POT (DRAPE_PART_STRETCH | DRAPE_PART_BEND | DRAPE_PART_SHEAR | \
                    DRAPE_PART_GRAVITY)
 
@@ -518,20 +511,8 @@ static int work_init(eq_work *w, drape_model *m, drape_error *err)
     w->c.print = 0;              /* library code never prints */
     w->c.error_handler = NULL;
     w->c.quick_return_if_not_posdef = 1;
-    w->c.final_ll = 1;           /* simplicial: LL^T, which fails when not PD */
-    /* small systems: simplicial, which uses neither BLAS nor OpenMP;
-     * larger ones supernodal with few, large supernodes (each opens an
-     * OpenMP region in Debian's CHOLMOD: DRAPE_EQ_SIMPLICIAL_MAX_N) */
-    if (w->N <= DRAPE_EQ_SIMPLICIAL_MAX_N) {
-        w->c.supernodal = CHOLMOD_SIMPLICIAL;
-    } else {
-        w->c.supernodal = CHOLMOD_SUPERNODAL;
-        w->c.nrelax[0] = DRAPE_EQ_NRELAX_0;
-        w->c.nrelax[1] = DRAPE_EQ_NRELAX_1;
-        w->c.nrelax[2] = DRAPE_EQ_NRELAX_2;
-        w->c.zrelax[1] = DRAPE_EQ_ZRELAX_1;
-        w->c.zrelax[2] = DRAPE_EQ_ZRELAX_2;
-    }
+    w->c.final_ll = 1;           /* LL^T, which fails when not PD */
+    w->c.supernodal = CHOLMOD_SUPERNODAL; /* its own amalgamation: above */
     w->B = cholmod_l_allocate_dense((size_t)w->N, 1, (size_t)w->N, CHOLMOD_REAL, &w->c);
     if (!w->B) goto nomem;
     int rc = work_order(w, err);
