@@ -60,8 +60,8 @@
  * CHOLMOD: the matrices are formed in the model's CSC pattern (full, both
  * triangles, diagonal stored), of which the lower triangle is read.
  * cholmod_l_analyze finds the fill-reducing order once (a supernodal
- * factor with CHOLMOD's own amalgamation); the triangle CHOLMOD factorises is laid out in that order
- * once (work_order), so that cholmod_l_factorize (numeric only, per
+ * LL^T factor with CHOLMOD's own amalgamation); the lower triangle that
+ * CHOLMOD factorises is laid out in that order once (work_order), so that cholmod_l_factorize (numeric only, per
  * iteration) need not permute and transpose it; cholmod_l_solve2 with its
  * workspaces kept.  Nothing is allocated inside the loop but what
  * CHOLMOD's factorisation allocates itself.
@@ -221,8 +221,6 @@ static double accel_norm(const eq_work *w, const double *f)
     return sqrt(s);
 }
 
-static double min_pivot(const cholmod_factor *F);
-
 /* A = -(K + Kc) + lambda M, Kc only if clamp (the lower triangle is what
  * CHOLMOD reads). */
 static void assemble(eq_work *w, double lambda, int clamp)
@@ -252,10 +250,8 @@ int eq_factorize(eq_work *w, drape_error *err)
                         w->c.status);
         return -1;
     }
-    if (w->LF->minor != (size_t)w->N) return 0;
-    /* an LDL^T factor (CHOLMOD may keep one) does not fail on negative
-     * pivots: check them */
-    return w->LF->is_ll || min_pivot(w->LF) > 0.0 ? 1 : 0;
+    /* a supernodal factor is LL^T: a negative pivot stops it */
+    return w->LF->minor == (size_t)w->N ? 1 : 0;
 }
 
 /* dy = A^-1 rhs (N numbers). */
@@ -305,27 +301,18 @@ static double trial_point(const eq_work *w, const double *x, double alpha,
     return sqrt(mx);
 }
 
-/* Smallest pivot L_ii^2 (LL^T) or D_ii (LDL^T) of the factor. */
+/* Smallest pivot L_ii^2 of the supernodal LL^T factor. */
 static double min_pivot(const cholmod_factor *F)
 {
     double mn = INFINITY;
     const double *x = F->x;
-    if (F->is_super) {
-        const long *super = F->super, *pi = F->pi, *px = F->px;
-        for (size_t s = 0; s < F->nsuper; s++) {
-            long k1 = super[s], k2 = super[s + 1];
-            long nsrow = pi[s + 1] - pi[s];
-            for (long j = 0; j < k2 - k1; j++) {
-                double d = x[px[s] + j * nsrow + j];
-                d = d * d;
-                if (d < mn) mn = d;
-            }
-        }
-    } else {
-        const long *p = F->p;
-        for (size_t j = 0; j < F->n; j++) {
-            double d = x[p[j]];
-            if (F->is_ll) d = d * d;
+    const long *super = F->super, *pi = F->pi, *px = F->px;
+    for (size_t s = 0; s < F->nsuper; s++) {
+        long k1 = super[s], k2 = super[s + 1];
+        long nsrow = pi[s + 1] - pi[s];
+        for (long j = 0; j < k2 - k1; j++) {
+            double d = x[px[s] + j * nsrow + j];
+            d = d * d;
             if (d < mn) mn = d;
         }
     }
@@ -381,8 +368,8 @@ static int64_t lower_slot(const drape_pattern *P, int64_t i, int64_t j, int64_t 
  * a lower triangle, supernodal), every call: measured 10.6 % of the CPU
  * of one default specimen (perf, docs/performance.md).  So the fill-reducing order is
  * found once (cholmod_l_analyze of the pattern: AMD and the elimination
- * tree's postorder), the triangle that CHOLMOD reads without a transpose
- * (supernodal: lower; simplicial: upper) is laid out in that order, and
+ * tree's postorder), the triangle that CHOLMOD's supernodal factorisation
+ * reads without a transpose (the lower one) is laid out in that order, and
  * it is analysed again in its natural order: the same factor, no
  * transposes.  w->asrc maps its entries to the model's slots, w->perm its
  * rows (eq_factorize, eq_solve).  Returns 0, 1 (out of memory) or -1
@@ -392,7 +379,6 @@ static int work_order(eq_work *w, drape_error *err)
     const drape_pattern *P = w->pat;
     long N = w->N;
     size_t nnz = (size_t)P->nnz;
-    int lower = w->c.supernodal != CHOLMOD_SIMPLICIAL;
     cholmod_sparse *S = cholmod_l_allocate_sparse((size_t)N, (size_t)N, nnz, 1, 1, -1,
                                                  CHOLMOD_REAL, &w->c);
     w->perm = drape_malloc(sizeof(long) * (size_t)N);
@@ -420,9 +406,9 @@ static int work_order(eq_work *w, drape_error *err)
     for (long j = 0; j < N; j++)
         for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++) {
             long I = pinv[P->rowind[k]], J = pinv[j];
-            if (lower ? I >= J : I <= J) anz++;
+            if (I >= J) anz++;
         }
-    w->A = cholmod_l_allocate_sparse((size_t)N, (size_t)N, anz, 1, 1, lower ? -1 : 1,
+    w->A = cholmod_l_allocate_sparse((size_t)N, (size_t)N, anz, 1, 1, -1,
                                      CHOLMOD_REAL, &w->c);
     w->asrc = drape_malloc(sizeof(long) * (anz > 0 ? anz : 1));
     if (!w->A || !w->asrc) goto nomem;
@@ -432,7 +418,7 @@ static int work_order(eq_work *w, drape_error *err)
         ap[J] = q;
         for (int64_t k = P->colptr[j]; k < P->colptr[j + 1]; k++) {
             long I = pinv[P->rowind[k]];
-            if (!(lower ? I >= J : I <= J)) continue;
+            if (I < J) continue;
             long t = q++; /* insertion by row */
             while (t > ap[J] && ai[t - 1] > I) {
                 ai[t] = ai[t - 1];
