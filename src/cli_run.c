@@ -84,7 +84,9 @@ const char *const drape_cli_run_keys[] = {
     /* seventeenth session: the fall's fold phase at half its step */
     "fall_fold_time_s", "fall_fold_step_s",
     /* nineteenth session: a refused longer step of the fall tried again */
-    "fall_retry_s", "fall_refused", NULL};
+    "fall_retry_s", "fall_refused",
+    /* twenty-second session: a fall ended because it kept gaining energy */
+    "fall_pumped", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -664,6 +666,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_cli_result_num(&r, "fall_retry_s", fp.retry > 0.0 ? fp.retry : NAN);
     drape_cli_result_int(&r, "fall_refused",
                          method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_refused : NAN);
+    drape_cli_result_int(&r, "fall_pumped",
+                         method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_pumped : NAN);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -162,6 +162,12 @@ typedef struct drape_equilibrium_result {
                              (then dyn_dt_fold),
                              or steps of the error-controlled fall (redone
                              at half the step) */
+    int dyn_pumped;       /* 1: the fixed-step fall was stopped because its
+                             total energy rose above its lowest value by more
+                             than a tenth of the peak kinetic energy at the
+                             fold or fall step (equilibrium_fall.c,
+                             DRAPE_EQ_PUMP_RISE), and fell again as in
+                             dyn_redone (which is then 1 too) */
     double dyn_end;       /* s: when the damped dynamics ended */
     int dyn_rejected;     /* steps redone shorter by the error control
                              (dyn_tol) */
