@@ -61,8 +61,9 @@
  * triangles, diagonal stored), of which the lower triangle is read.
  * cholmod_l_analyze finds the fill-reducing order once (a supernodal
  * LL^T factor with CHOLMOD's own amalgamation); the lower triangle that
- * CHOLMOD factorises is laid out in that order once (work_order), so that cholmod_l_factorize (numeric only, per
- * iteration) need not permute and transpose it; cholmod_l_solve2 with its
+ * CHOLMOD factorises is laid out in that order once (work_order), so
+ * that cholmod_l_factorize (numeric only, per iteration) need not permute
+ * and transpose it; cholmod_l_solve2 with its
  * workspaces kept.  Nothing is allocated inside the loop but what
  * CHOLMOD's factorisation allocates itself.
  *

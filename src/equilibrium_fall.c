@@ -35,12 +35,13 @@
  * keeps gaining is its linearly implicit step's, whose matrix drops the
  * compressed springs' negative stiffness.  Measured on the table scene
  * at 1 cm: seeds 11 and 12 gain 43 % and 67 % of the peak kinetic energy
- * from about 0.7 s on, step by step (1,100 of 2,560 steps raise it), and
- * swing on to the longest fall (4 fall times); halving the step does not
- * stop it.  In the falls that do not pump, the largest such rise found
- * was 3.3 % (cotton, 0.11 s into the fall, while the kinetic energy still
- * grows; six fabrics of the Cusick scene and the table, 32 specimens
- * each; docs/ensemble.md, "The fall that pumps energy"). */
+ * from about 0.7 s on, step by step (seed 11: 1,134 of 2,559 steps
+ * raise it), and swing on to the longest fall (4 fall times); halving the
+ * step does not stop it.  In the falls that do not pump, the largest such
+ * rise found was 3.3 % (cotton, 0.11 s into the fall, while the kinetic
+ * energy still grows; cotton, cotton-breen-kes, cotton-poly and the
+ * tablecloth on the Cusick scene and the table's other seeds, 32
+ * specimens each; docs/ensemble.md, "The fall that pumps energy"). */
 #define DRAPE_EQ_PUMP_RISE 0.1
 /* How often a refused longer step of the fixed-step fall is tried again
  * (o->dyn_retry) after each change to it.  A retry that is refused again
@@ -116,7 +117,8 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  * at half the step: the position estimate does not see a step that pumps
  * energy into a fold.  Every step's total energy is recorded (r->dyn_e_*).
  * Returns 0, 1 (folded or too small a step), 2 (stop raised), 3 (a
- * fixed-step fall whose total energy rose above its start, with
+ * fixed-step fall whose total energy rose above its start, or kept
+ * rising at its shorter step (DRAPE_EQ_PUMP_RISE, r->dyn_pumped), with
  * o->dyn_redo_tol > 0: x is then a state of no use) or -1 (err set). */
 int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
             drape_error *err)
@@ -402,14 +404,11 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             break;
         }
         if (e_now < e_low_all) e_low_all = e_now;
-        {
-            double ke = kinetic_energy(w, v);
-            if (ke > ke_max) ke_max = ke;
-            else if (ke < 0.5 * ke_max) ke_fell = 1;
-        }
+        double ke = kinetic_energy(w, v);
+        if (ke > ke_max) ke_max = ke;
+        else if (ke < 0.5 * ke_max) ke_fell = 1;
         if ((long_step || t_retry < INFINITY) && e_now < e_low) e_low = e_now;
         if (ke_frac > 0.0) {
-            double ke = kinetic_energy(w, v);
             if (ke > ke_peak) ke_peak = ke;
             ring[iw] = ke;
             ring_t[iw] = t;
