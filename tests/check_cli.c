@@ -25,6 +25,22 @@ START_TEST(test_help_version)
     ck_assert_int_eq(tu_run_drape("check --help", out, CAP, err, CAP), 0);
     ck_assert_int_eq(tu_run_drape("run --help", out, CAP, err, CAP), 0);
     ck_assert_ptr_nonnull(strstr(out, "--spacing"));
+    /* the help names the shipped scenes' numbers of specimens, read here
+     * from the scene files' own `specimens:` lines */
+    int n[2] = {0, 0};
+    const char *scenes[2] = {"../scenes/cusick.yaml", "../scenes/table.yaml"};
+    for (int k = 0; k < 2; k++) {
+        FILE *fp = fopen(scenes[k], "r");
+        ck_assert_ptr_nonnull(fp);
+        char line[512];
+        while (fgets(line, sizeof line, fp))
+            if (sscanf(line, "specimens: %d", &n[k]) == 1) break;
+        fclose(fp);
+        ck_assert_int_gt(n[k], 1);
+    }
+    char want[128];
+    snprintf(want, sizeof want, "Cusick scene asks for %d, the table scene for %d.", n[0], n[1]);
+    ck_assert_msg(strstr(out, want) != NULL, "run --help does not say: %s", want);
 }
 END_TEST
 
