@@ -15,15 +15,15 @@ DATADIR=$3
 DOCDIR=$4
 COMMANDS="check run batch import compare bench"
 
+# print one line as it is (dash's echo would expand \f)
+p() { printf '%s\n' "$*"; }
+
 command -v help2man >/dev/null 2>&1 || {
     p "man.sh: help2man is missing (make deps installs it)" >&2
     exit 1
 }
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
-
-# print one line as it is (dash's echo would expand \f)
-p() { printf '%s\n' "$*"; }
 
 # roff-escape verbatim text: backslashes, leading dots and quotes, hyphens
 roff() {

@@ -33,9 +33,9 @@ static const char batch_usage[] =
     "Run SCENE once per fabric (`drape run SCENE --fabric FABRIC`) in parallel\n"
     "child processes and write one CSV row per fabric to DIR/results.csv:\n"
     "fabric_file, the keys of `drape run --format csv`, and error (the run's\n"
-    "error message, empty on success).  status is equilibrium, t_max or failed\n"
-    "as reported by the run, or error when the run printed no result (invalid\n"
-    "fabric, crash).  results.csv is replaced atomically after every finished\n"
+    "error message, empty on success).  status is equilibrium, t_max, failed\n"
+    "or interrupted as reported by the run, or error when the run printed no\n"
+    "result (invalid fabric, crash).  results.csv is replaced atomically after every finished\n"
     "fabric; each run's output and messages are kept in DIR/logs/.\n"
     "\n"
     "Options:\n"
@@ -614,6 +614,7 @@ int drape_cli_batch(int argc, char **argv)
     b.dir = BATCH_DEFAULT_DIR;
     long jobs = 1;
     int resume = 0, quiet = 0, c;
+    double spacing = 0.0; /* --spacing, m: the scene is checked with it */
     while ((c = getopt_long(argc, argv, "j:qh", opts, NULL)) != -1) {
         const char *name = NULL;
         switch (c) {
@@ -651,6 +652,10 @@ int drape_cli_batch(int argc, char **argv)
             break;
         case O_SPACING:
             if (check_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, 1)) return 2;
+            {
+                char why[256];
+                drape_units_parse(optarg, DRAPE_DIM_LENGTH, &spacing, why, sizeof why);
+            }
             name = "--spacing";
             break;
         case O_FORM:
@@ -709,13 +714,15 @@ int drape_cli_batch(int argc, char **argv)
         case O_SEED: {
             char *end;
             errno = 0;
-            long v = strtol(optarg, &end, 10);
+            long long v = strtoll(optarg, &end, 10);
             name = c == O_SPECIMENS ? "--specimens" : "--seed";
             if (errno || *end || end == optarg || v < (c == O_SPECIMENS ? 1 : 0) ||
-                (c == O_SPECIMENS && v > DRAPE_SCENE_SPECIMENS_MAX))
+                (c == O_SPECIMENS && v > DRAPE_SCENE_SPECIMENS_MAX) ||
+                (unsigned long long)v > DRAPE_SCENE_SEED_MAX)
                 return usage_error(c == O_SPECIMENS
                                        ? "--specimens: expected an integer from 1 to 1000, got `%s'"
-                                       : "--seed: expected a non-negative integer, got `%s'",
+                                       : "--seed: expected a non-negative integer up to 2^53 - 1 "
+                                         "(9007199254740991), got `%s'",
                                    optarg);
             break;
         }
@@ -791,6 +798,10 @@ int drape_cli_batch(int argc, char **argv)
     /* strict: the scene's own fabric must exist too (a scene file with a
      * dangling fabric is bad input for check, run and batch alike, issue 7) */
     if (drape_scene_load(b.scene, &s, &err, NULL, NULL) != 0) goto fail;
+    if (spacing > 0.0) { /* as each run applies it */
+        s.spacing = spacing;
+        s.at_spacing.line = DRAPE_SCENE_POS_COMMAND_LINE;
+    }
     for (int i = optind + 1; i < argc; i++) {
         drape_fabric fab;
         drape_error fe;

@@ -551,7 +551,9 @@ int drape_cli_bench(int argc, char **argv)
             if (bench_quantity(c == O_MAXWALL ? "--max-wall" : "--ref-max-wall", optarg,
                                DRAPE_DIM_TIME, &w)) return 2;
             if (!(w >= 0) || !isfinite(w))
-                return bench_usage_error("--max-wall: must be a time >= 0, got %s", optarg);
+                return bench_usage_error(c == O_MAXWALL ? "--max-wall: must be a time >= 0, got %s"
+                                                        : "--ref-max-wall: must be a time >= 0, got %s",
+                                         optarg);
             if (c == O_MAXWALL) max_wall = w;
             else ref_max_wall = w;
             break;

@@ -195,7 +195,7 @@ int drape_cli_check(int argc, char **argv)
     int c;
     while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         if (c == 'h') { fputs(check_usage, stdout); return 0; }
-        fputs(check_usage, stderr);
+        fputs("Try `drape check --help'.\n", stderr); /* getopt named the option */
         return drape_error_exit_status(DRAPE_E_USAGE);
     }
     if (optind >= argc) {

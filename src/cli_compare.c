@@ -57,11 +57,29 @@ typedef struct side {
     json_object *hist;
 } side;
 
-static double num(json_object *o, const char *key)
+
+/* The number at key (NAN where it is null or missing); -1 with err set
+ * where it is something else, or a node count that is not a whole
+ * number >= 0.  where: "specimens[3]" or NULL (the top level). */
+static int field(const char *path, json_object *o, const char *key, const char *where,
+                 int count, double *out, drape_error *err)
 {
     json_object *v;
-    if (!json_object_object_get_ex(o, key, &v) || !v) return NAN;
-    return json_object_get_double(v);
+    *out = NAN;
+    if (!json_object_object_get_ex(o, key, &v) || !v) return 0;
+    char k[64];
+    snprintf(k, sizeof k, "%s%s%s", where ? where : "", where ? "." : "", key);
+    if (!json_object_is_type(v, json_type_double) && !json_object_is_type(v, json_type_int))
+        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, k, "expected a number or null, "
+                               "got %s", json_object_to_json_string(v));
+    *out = json_object_get_double(v);
+    if (count && !(*out >= 0.0 && *out == floor(*out) && *out <= DRAPE_ENSEMBLE_MAX_NODES))
+        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, k,
+                               "expected a node count from 0 to %d, got %g",
+                               DRAPE_ENSEMBLE_MAX_NODES, *out);
+    if (!count && !isfinite(*out))
+        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, k, "expected a finite number");
+    return 0;
 }
 
 /* The statistics of a result, from its specimens array (or, for a result
@@ -70,32 +88,74 @@ static int load(const char *path, side *s, json_object **keep, drape_error *err)
 {
     char *text = drape_cli_read_file(path, (size_t)64 << 20, NULL, err);
     if (!text) return -1;
-    json_object *o = json_tokener_parse(text);
+    /* one JSON object and nothing after it but white space */
+    json_tokener *tok = json_tokener_new();
+    if (!tok) {
+        drape_free(text);
+        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
+    }
+    size_t len = strlen(text);
+    json_object *o = json_tokener_parse_ex(tok, text, (int)len);
+    size_t used = json_tokener_get_parse_end(tok);
+    enum json_tokener_error je = json_tokener_get_error(tok);
+    json_tokener_free(tok);
+    int line = 1, col = 1;
+    for (size_t i = 0; i < used && i < len; i++) {
+        if (text[i] == '\n') { line++; col = 1; }
+        else col++;
+    }
+    size_t rest = used;
+    while (rest < len && strchr(" \t\r\n", text[rest])) rest++;
     drape_free(text);
-    if (!o || !json_object_is_type(o, json_type_object)) {
+    if (!o || je != json_tokener_success || rest < len ||
+        !json_object_is_type(o, json_type_object)) {
         if (o) json_object_put(o);
-        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, NULL,
-                               "not one JSON object (the output of `drape run`)");
+        return drape_error_set(err, DRAPE_E_INPUT, path, line, col, NULL,
+                               "not one JSON object (the output of `drape run`)%s%s",
+                               je != json_tokener_success ? ": " : o ? ": text after it" : "",
+                               je != json_tokener_success ? json_tokener_error_desc(je) : "");
     }
     *keep = o;
     json_object *sp;
     int n = 0;
     double dcs[DRAPE_SCENE_SPECIMENS_MAX];
     int nodes[DRAPE_SCENE_SPECIMENS_MAX];
-    if (json_object_object_get_ex(o, "specimens", &sp) && json_object_is_type(sp, json_type_array)) {
+    if (json_object_object_get_ex(o, "specimens", &sp) && sp) {
+        if (!json_object_is_type(sp, json_type_array))
+            return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, "specimens",
+                                   "expected an array of specimens");
         int m = (int)json_object_array_length(sp);
-        for (int k = 0; k < m && n < DRAPE_SCENE_SPECIMENS_MAX; k++) {
+        if (m > DRAPE_SCENE_SPECIMENS_MAX)
+            return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, "specimens",
+                                   "%d specimens: at most %d", m, DRAPE_SCENE_SPECIMENS_MAX);
+        for (int k = 0; k < m; k++) {
             json_object *e = json_object_array_get_idx(sp, (size_t)k);
-            double dc = num(e, "dc"), nd = num(e, "nodes");
+            char where[40];
+            snprintf(where, sizeof where, "specimens[%d]", k);
+            if (!e || !json_object_is_type(e, json_type_object))
+                return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, where,
+                                       "expected an object");
+            double dc, nd;
+            if (field(path, e, "dc", where, 0, &dc, err) != 0 ||
+                field(path, e, "nodes", where, 1, &nd, err) != 0)
+                return -1;
             dcs[n] = dc;
             nodes[n] = isfinite(nd) ? (int)nd : -1;
             n++;
         }
-    } else if (isfinite(num(o, "dc"))) {
-        dcs[0] = num(o, "dc");
-        nodes[0] = isfinite(num(o, "nodes")) ? (int)num(o, "nodes") : -1;
-        n = 1;
+    } else {
+        double dc, nd;
+        if (field(path, o, "dc", NULL, 0, &dc, err) != 0 ||
+            field(path, o, "nodes", NULL, 1, &nd, err) != 0)
+            return -1;
+        if (isfinite(dc)) {
+            dcs[0] = dc;
+            nodes[0] = isfinite(nd) ? (int)nd : -1;
+            n = 1;
+        }
     }
+    double cpu;
+    if (field(path, o, "cpu_s", NULL, 0, &cpu, err) != 0) return -1;
     drape_ensemble_stats_compute(dcs, nodes, n, &s->st);
     s->ndc = 0;
     for (int k = 0; k < n; k++)
@@ -103,7 +163,7 @@ static int load(const char *path, side *s, json_object **keep, drape_error *err)
     if (s->st.n == 0)
         return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, "specimens",
                                "no specimen with a drape coefficient");
-    s->cpu_per = num(o, "cpu_s") / (n > 0 ? n : 1);
+    s->cpu_per = cpu / (n > 0 ? n : 1);
     return 0;
 }
 
@@ -140,6 +200,12 @@ int drape_cli_compare(int argc, char **argv)
         fputs(compare_usage, stdout);
         return 0;
     }
+    for (int i = 1; i < argc; i++)
+        if (argv[i][0] == '-' && argv[i][1] != 0) {
+            fprintf(stderr, "drape compare: unrecognized option '%s'\nTry `drape compare "
+                    "--help'.\n", argv[i]);
+            return drape_error_exit_status(DRAPE_E_USAGE);
+        }
     if (argc != 3) {
         fputs("drape: compare: expected two result files\nTry `drape compare --help'.\n", stderr);
         return drape_error_exit_status(DRAPE_E_USAGE);

@@ -39,7 +39,7 @@ void drape_cli_result_str(drape_cli_result *r, const char *key, const char *s)
 {
     drape_cli_field *f = push(r, key, DRAPE_CLI_F_STR);
     if (!f) return;
-    if (s) snprintf(f->text, sizeof f->text, "%s", s);
+    if (s) snprintf(f->text, sizeof f->text, "%.*s", (int)sizeof f->text - 1, s); /* cut */
     else f->is_null_text = 1;
 }
 
@@ -215,6 +215,33 @@ void drape_cli_result_print_csv(FILE *out, const drape_cli_result *r)
 
 /* ---- child to parent ------------------------------------------------------- */
 
+/* A text in the parent-child protocol: backslash, tab, newline and
+ * carriage return escaped (a fabric's name may hold any of them). */
+static void write_text(FILE *out, const char *t)
+{
+    for (; *t; t++) {
+        switch (*t) {
+        case '\\': fputs("\\\\", out); break;
+        case '\t': fputs("\\t", out); break;
+        case '\n': fputs("\\n", out); break;
+        case '\r': fputs("\\r", out); break;
+        default: fputc(*t, out);
+        }
+    }
+}
+
+/* Undo write_text in place. */
+static void unescape_text(char *t)
+{
+    char *o = t;
+    for (; *t; t++) {
+        if (*t != '\\' || !t[1]) { *o++ = *t; continue; }
+        t++;
+        *o++ = *t == 't' ? '\t' : *t == 'n' ? '\n' : *t == 'r' ? '\r' : *t;
+    }
+    *o = 0;
+}
+
 void drape_cli_result_write(FILE *out, const drape_cli_result *r)
 {
     for (int i = 0; i < r->n; i++) {
@@ -224,7 +251,11 @@ void drape_cli_result_write(FILE *out, const drape_cli_result *r)
         case DRAPE_CLI_F_INT: fprintf(out, "%s\ti\t%.17g\n", f->key, f->value); break;
         case DRAPE_CLI_F_STR:
             if (f->is_null_text) fprintf(out, "%s\tz\t\n", f->key);
-            else fprintf(out, "%s\ts\t%s\n", f->key, f->text); /* no tabs or newlines in texts */
+            else {
+                fprintf(out, "%s\ts\t", f->key);
+                write_text(out, f->text);
+                fputc('\n', out);
+            }
             break;
         default: break;
         }
@@ -240,7 +271,7 @@ int drape_cli_result_read(const char *text, drape_cli_result *r)
         if (!nl) return -1;
         const char *t1 = memchr(p, '\t', (size_t)(nl - p));
         if (!t1 || nl - t1 < 3 || t1[2] != '\t') return -1;
-        char key[48], val[DRAPE_CLI_TEXT_MAX];
+        char key[48], val[2 * DRAPE_CLI_TEXT_MAX];
         int kl = (int)(t1 - p), vl = (int)(nl - (t1 + 3));
         if (kl <= 0 || kl >= (int)sizeof key || vl >= (int)sizeof val) return -1;
         memcpy(key, p, (size_t)kl);
@@ -250,7 +281,10 @@ int drape_cli_result_read(const char *text, drape_cli_result *r)
         switch (t1[1]) {
         case 'n': drape_cli_result_num(r, key, strtod(val, NULL)); break;
         case 'i': drape_cli_result_int(r, key, strtod(val, NULL)); break;
-        case 's': drape_cli_result_str(r, key, val); break;
+        case 's':
+            unescape_text(val);
+            drape_cli_result_str(r, key, val);
+            break;
         case 'z': drape_cli_result_str(r, key, NULL); break;
         default: return -1;
         }

@@ -234,7 +234,7 @@ typedef struct fall_params {
  * result as a run (status equilibrium or failed, no time, no integrator
  * statistics).  Frames: the final state only.  Returns 1 on success. */
 static int run_static(drape_model *m, const drape_fabric *f, const fall_params *fp, run_ctx *rc,
-                      drape_sim_result *res,
+                      double strain_limit, drape_sim_result *res,
                       drape_equilibrium_result *er, drape_error *err)
 {
     const drape_lattice *L = drape_model_lattice(m);
@@ -292,6 +292,14 @@ static int run_static(drape_model *m, const drape_fabric *f, const fall_params *
                         "residual force %.3g x particle weight); hint: try --method dynamic",
                         drape_equilibrium_status_name(er->status), er->iterations,
                         er->max_force_rel);
+        return 0;
+    }
+    /* the strain limit (end.strain_limit, --strain-limit) holds for the
+     * rest state the solver found, as for every state of a dynamic run */
+    if (strain_limit > 0.0 && res->max_strain > strain_limit) {
+        drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                        "the rest state's largest strain %.4g exceeds the strain limit %.4g "
+                        "(end.strain_limit, --strain-limit)", res->max_strain, strain_limit);
         return 0;
     }
     res->status = DRAPE_SIM_EQUILIBRIUM;
@@ -366,7 +374,10 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (integrator) snprintf(s.integrator, sizeof s.integrator, "%s", integrator);
     if (rtol > 0) s.rtol = rtol;
     if (atol > 0) s.atol = atol;
-    if (spacing > 0) s.spacing = spacing;
+    if (spacing > 0) {
+        s.spacing = spacing;
+        if (!resume_dir) s.at_spacing.line = DRAPE_SCENE_POS_COMMAND_LINE;
+    }
     if (t_max > 0) s.t_max = t_max;
     if (strain_limit > 0) s.strain_limit = strain_limit;
     if (max_order > 0) s.max_order = max_order;
@@ -428,6 +439,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_model_opts_from_scene(&s, &mo);
     m = drape_model_new(L, &f, &mo, &err);
     if (!m) goto fail;
+    /* the static solver measures its residual in particle weights */
+    if (method_static && !(drape_model_parts(m) & DRAPE_PART_GRAVITY)) {
+        drape_error_set(&err, DRAPE_E_INPUT, NULL, 0, 0, "terms",
+                        "the %s method settles the cloth under its weight: the energy terms "
+                        "must include gravity", method == DRAPE_METHOD_FALL ? "fall" : "static");
+        goto fail;
+    }
+    if (ra->check_only) goto out;
 
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
@@ -447,7 +466,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.frame = ri ? ri->frames : 0;
 
     if (method_static) {
-        sim_ok = run_static(m, &f, &fp, &rc, &res, &er, &err);
+        sim_ok = run_static(m, &f, &fp, &rc, s.strain_limit, &res, &er, &err);
         if (stop_signal) { /* the solve stops at its next iteration */
             interrupted = 1;
             res.status = DRAPE_SIM_INTERRUPTED;
@@ -717,6 +736,16 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         snprintf(p, sizeof p, "%s/drape.xmf", out_dir);
         unlink(p);
     }
+    /* the picture of one specimen (as for an ensemble), before the result
+     * is printed: a run that cannot write it prints no result */
+    if (!child && out_dir && have_dc &&
+        (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE)) {
+        int na = 0;
+        const double *rad = drape_dc_radii(dc, &na);
+        drape_svg_specimen sv = {one.seed, one.dc, one.nodes, sh.centre_m[0], sh.centre_m[1],
+                                 rad, na, sh.node_threshold_m};
+        if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
+    }
     if (child) {
         drape_cli_result_write(child->out, &r);
         if (have_dc) {
@@ -731,13 +760,6 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         drape_cli_result_print_csv(stdout, &r);
     } else if (drape_cli_result_print_json(stdout, &r) != 0) {
         goto nomem;
-    } else if (out_dir && have_dc && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE)) {
-        /* the picture of one specimen, as for an ensemble */
-        int na = 0;
-        const double *rad = drape_dc_radii(dc, &na);
-        drape_svg_specimen sv = {one.seed, one.dc, one.nodes, sh.centre_m[0], sh.centre_m[1],
-                                 rad, na, sh.node_threshold_m};
-        if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
     }
     if (fflush(child ? child->out : stdout) != 0) {
         drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");

@@ -34,6 +34,9 @@ typedef struct run_args {
     int jobs;                 /* -j: processes at once; 0 = one per core */
     int no_warnings;          /* the loaders' warnings are not printed (an
                                  ensemble's specimens after the first) */
+    int check_only;           /* load, check and build the model, then stop
+                                 (an ensemble checks its input once before
+                                 it starts its specimens) */
 } run_args;
 
 /* In an ensemble's child process: where the result goes instead of stdout
@@ -43,7 +46,9 @@ typedef struct run_child {
 } run_child;
 
 /* One specimen: load, build, run, measure, write frames, print the result
- * (child NULL) or send it to the parent.  Returns the exit status. */
+ * (child NULL) or send it to the parent.  Returns the exit status.  With
+ * a->check_only: load, check and build only (the error printed, nothing
+ * on stdout, no file written). */
 int drape_cli_run_one(const run_args *a, run_child *child);
 
 /* The run as the scene and options ask: one specimen in this process, or

@@ -31,13 +31,20 @@ static const char run_usage[] =
     "t_end_s, dc, nodes, r_min_m, r_max_m, tip_angle_deg, bending_length_m,\n"
     "flexural_rigidity_Nm, energy_J{kinetic,stretch,bend,shear,gravity},\n"
     "max_strain, wall_s, steps, rhs_evals, jac_evals, lin_setups, nonlin_iters,\n"
-    "err_test_fails, conv_fails, and more: mass_kg, areas, max_speed_m_s (at the\n"
-    "end), mean_speed_m_s (largest particle speed averaged over the last\n"
-    "equilibrium check interval: what the equilibrium test compares), the static\n"
-    "solver's keys, linear_solver, lin_iters, lin_factors, integrator_switches\n"
+    "err_test_fails, conv_fails, and more: mass_kg, area_nominal_m2,\n"
+    "area_mesh_m2, max_speed_m_s (at the end), mean_speed_m_s (largest particle\n"
+    "speed averaged over the last equilibrium check interval: what the\n"
+    "equilibrium test compares), the static solver's (iterations,\n"
+    "factorizations, certified, min_pivot_N_m, omega_min_rad_s,\n"
+    "max_force_rel), linear_solver, lin_iters, lin_factors, integrator_switches\n"
     "(auto: changes between cvode-bdf and arkode-erk), max_order (cvode-bdf,\n"
-    "auto); null where the scene does not produce one).  status is\n"
-    "equilibrium, t_max, failed or interrupted.\n"
+    "auto), method, the fall's (fall_time_s, fall_step_s, fall_end_s,\n"
+    "fall_steps, fall_tol_m, fall_fold_time_s, fall_fold_step_s, fall_retry_s,\n"
+    "fall_refused, fall_redone, fall_pumped), step_s and substeps (animate),\n"
+    "the energy balance (energy_total_start_J, energy_total_end_J,\n"
+    "energy_max_rise_J, energy_gain_J, energy_rescales), max_strain_peak,\n"
+    "terms, damping_shear_s; null where the scene does not produce one;\n"
+    "docs/outputs.md).  status is equilibrium, t_max, failed or interrupted.\n"
     "\n"
     "Repeated specimens (scene key `specimens: N`, or --specimens N): a drape\n"
     "test of N specimens that differ only in the perturbation seed (specimen k\n"
@@ -92,7 +99,7 @@ static const char run_usage[] =
     "                           between two output points (default 1000000)\n"
     "  --strain-limit X         stop (status failed) when a stretch edge's strain\n"
     "                           exceeds X, e.g. 0.2 = 20 % (scene: end.strain_limit,\n"
-    "                           default 0.2)\n"
+    "                           default 0.2; static and fall: the rest state's)\n"
     "  --fall-time T, --fall-step T  the fall method's least duration and its\n"
     "                           fixed step\n"
     "                           (scene: solver.fall_time, fall_step; default\n"
@@ -303,8 +310,9 @@ int drape_cli_run(int argc, char **argv)
             char *end;
             errno = 0;
             unsigned long v = strtoul(optarg, &end, 10);
-            if (errno || *end || optarg[0] == '-' || optarg[0] == 0)
-                return usage_error("--seed: expected a non-negative integer, got `%s'%s", optarg, "");
+            if (errno || *end || optarg[0] == '-' || optarg[0] == 0 || v > DRAPE_SCENE_SEED_MAX)
+                return usage_error("--seed: expected a non-negative integer up to 2^53 - 1 "
+                                   "(9007199254740991), got `%s'%s", optarg, "");
             ra.has_seed = 1;
             ra.seed = v;
             break;
@@ -377,7 +385,9 @@ int drape_cli_run(int argc, char **argv)
             fputs("Try `drape run --help'.\n", stderr);
             return drape_error_exit_status(DRAPE_E_USAGE);
         }
-        if (c != O_RESUME && c != O_FORMAT && c != 'q' && c != 'j') run_opt = argv[optind - 1];
+        if (c != O_RESUME && c != O_FORMAT && c != 'q' && c != 'j') /* the option, not its value */
+            run_opt = optarg && optarg == argv[optind - 1] && optind >= 2 ? argv[optind - 2]
+                                                                       : argv[optind - 1];
     }
     if (argc - optind > 1) return usage_error("run: one scene at a time, got `%s' and `%s'", argv[optind], argv[optind + 1]);
     if (resume_dir && optind < argc)

@@ -362,8 +362,25 @@ int drape_cli_specimens_run(const run_args *a)
     }
     int n = a->specimens > 0 ? a->specimens : s.specimens;
     if (n <= 1) return drape_cli_run_one(a, NULL);
+    /* the input once, here, as one specimen would check it (the fabric,
+     * the options, the lattice and the model): an input error is then
+     * reported once, with its own exit status, not by every specimen */
+    {
+        run_args ca = *a;
+        ca.check_only = 1;
+        ca.specimens = 1;
+        ca.quiet = 1;
+        ca.no_warnings = 1; /* the first specimen prints them */
+        int cst = drape_cli_run_one(&ca, NULL);
+        if (cst != 0) return cst;
+    }
 
     unsigned long seed0 = a->has_seed ? a->seed : s.perturb_seed;
+    if (seed0 > DRAPE_SCENE_SEED_MAX - (unsigned long)(n - 1)) {
+        fprintf(stderr, "drape: run: the seeds of %d specimens from %lu go past 2^53 - 1 "
+                "(9007199254740991): give a smaller --seed\n", n, seed0);
+        return drape_error_exit_status(DRAPE_E_USAGE);
+    }
     if (a->has_seed) s.perturb_seed = a->seed;
     if (a->spacing > 0) s.spacing = a->spacing;
     int jobs = a->jobs;
@@ -447,6 +464,9 @@ int drape_cli_specimens_run(const run_args *a)
                 ens_stop = -1;
             }
             parse_child(c);
+            if (c->exit_status == 0 && !c->have_res)
+                fprintf(stderr, "drape: specimen %d (seed %lu): its result could not be read "
+                        "(internal error)\n", k + 1, seed0 + (unsigned long)k);
             n_running--;
             n_done++;
             if (progress)
@@ -460,7 +480,7 @@ int drape_cli_specimens_run(const run_args *a)
     sigaction(SIGTERM, &old_term, NULL);
     if (ens_stop < 0) goto fail;
 
-    int n_failed = 0, interrupted = ens_stop > 0;
+    int n_failed = 0, n_ok = 0, interrupted = ens_stop > 0;
     const child *first = NULL;
     for (int k = 0; k < n; k++) {
         child *c = &ch[k];
@@ -483,11 +503,26 @@ int drape_cli_specimens_run(const run_args *a)
         dcs[k] = p->dc;
         nodes[k] = p->nodes;
         if (ok && !first) first = c;
+        n_ok += ok;
         sv[k] = (drape_svg_specimen){p->seed, p->dc, p->nodes, c->cx, c->cy,
                                      ok ? c->radii : NULL, ok ? c->n_radii : 0, c->thr};
     }
     drape_ensemble_stats st;
     drape_ensemble_stats_compute(dcs, nodes, n, &st);
+    /* every specimen failed in the same way that is not numerical (an
+     * output directory it cannot write, no memory): that error, its exit
+     * status and no result, as for one specimen */
+    if (n_failed == n && !interrupted) {
+        int common = ch[0].exit_status;
+        for (int k = 1; k < n; k++)
+            if (ch[k].exit_status != common) common = -1;
+        if (common > 0 && common < 128 && common != drape_error_exit_status(DRAPE_E_NUMERIC)) {
+            fprintf(stderr, "drape: every specimen failed (exit status %d)\n", common);
+            status = common;
+            if (created_dir) rmdir(a->out_dir); /* only if empty */
+            goto out;
+        }
+    }
     double wall = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     build_result(r, ch, n, first, &st, n_failed, interrupted, wall, seed0, spec);
     if (!drape_cli_result_check_keys(r)) {
@@ -512,14 +547,15 @@ int drape_cli_specimens_run(const run_args *a)
         int sig = ens_stop > 0 ? (int)ens_stop : SIGINT;
         fprintf(stderr, "drape: interrupted by %s with %d of %d specimens finished (an ensemble "
                 "is not resumable: run it again)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
-                st.n, n);
+                n_ok, n);
         status = 128 + sig;
-    } else if (st.n == 0) {
+    } else if (n_failed == n) { /* (a hang or cantilever has no DC: st.n is 0) */
         fprintf(stderr, "drape: every specimen failed\n");
         status = drape_error_exit_status(DRAPE_E_NUMERIC);
+        if (created_dir) rmdir(a->out_dir); /* only if empty */
     } else if (n_failed) {
         fprintf(stderr, "drape: warning: %d of %d specimens failed; the statistics use the "
-                "other %d\n", n_failed, n, st.n);
+                "other %d\n", n_failed, n, n_ok);
     }
     goto out;
 fail:

@@ -192,6 +192,12 @@ int main(int argc, char **argv)
     int sub_argc = argc - optind;
     char **sub_argv = argv + optind;
     optind = 0; /* reset getopt for the subcommand (GNU: 0 re-initialises) */
+    /* the subcommands' getopt names an unknown option or a missing
+     * argument itself ("drape run: unrecognized option '--x'") */
+    opterr = 1;
+    static char prog[64];
+    snprintf(prog, sizeof prog, "drape %.50s", cmd);
+    sub_argv[0] = prog;
     if (strcmp(cmd, "check") == 0) return drape_cli_check(sub_argc, sub_argv);
     if (strcmp(cmd, "run") == 0) return drape_cli_run(sub_argc, sub_argv);
     if (strcmp(cmd, "batch") == 0) return drape_cli_batch(sub_argc, sub_argv);

@@ -332,7 +332,7 @@ static int parse_perturbation(const drape_yread *c, const drape_ynode *root, dra
             char *end;
             errno = 0;
             s->perturb_seed = strtoul(t, &end, 10);
-            if (errno == ERANGE) big = 1;
+            if (errno == ERANGE || s->perturb_seed > DRAPE_SCENE_SEED_MAX) big = 1;
             if (big || *end) ok = 0;
         }
         if (!ok) {
@@ -341,8 +341,8 @@ static int parse_perturbation(const drape_yread *c, const drape_ynode *root, dra
             return drape_yread_error(c, v, "perturbation.seed",
                                      DRAPE_E_INPUT,
                                      "expected a non-negative integer%s, got "
-                                     "\"%s\"", big ? " (this one is too "
-                                     "large)" : "", t);
+                                     "\"%s\"", big ? " up to 2^53 - 1 "
+                                     "(9007199254740991)" : "", t);
         }
     }
     return 0;

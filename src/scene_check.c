@@ -54,6 +54,12 @@ static int pos_error(drape_error *err, const drape_scene *s,
                      drape_scene_pos p, const char *key,
                      drape_error_kind kind, const char *msg)
 {
+    if (p.line == DRAPE_SCENE_POS_COMMAND_LINE) { /* an option's value */
+        char opt[64];
+        snprintf(opt, sizeof opt, "--%s", key);
+        return drape_error_set(err, kind == DRAPE_E_INPUT ? DRAPE_E_USAGE : kind, NULL, 0, 0,
+                               opt, "%s", msg);
+    }
     return drape_error_set(err, kind, s->path, p.line, p.column, key, "%s",
                            msg);
 }

@@ -10,6 +10,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <json-c/json.h>
+
 #include "testutil.h"
 
 #define CAP 65536
@@ -41,6 +43,42 @@ START_TEST(test_help_version)
     char want[128];
     snprintf(want, sizeof want, "Cusick scene asks for %d, the table scene for %d.", n[0], n[1]);
     ck_assert_msg(strstr(out, want) != NULL, "run --help does not say: %s", want);
+
+    /* every key of a result (an ensemble's: all of them) is named in the
+     * help, as a whole word */
+    static char help[CAP];
+    snprintf(help, sizeof help, "%s", out);
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+                                  "--specimens 2 -j 1", out, CAP, err, CAP), 0);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "%s", out);
+    int nkeys = 0;
+    json_object_object_foreach(o, key, val) {
+        (void)val;
+        size_t kl = strlen(key);
+        int found = 0;
+        for (const char *p = strstr(help, key); p && !found; p = strstr(p + 1, key)) {
+            char before = p > help ? p[-1] : ' ', after = p[kl];
+            found = !(before == '_' || (before >= 'a' && before <= 'z')) &&
+                    !(after == '_' || (after >= 'a' && after <= 'z') || (after >= '0' && after <= '9'));
+        }
+        ck_assert_msg(found, "run --help does not name the result key %s", key);
+        nkeys++;
+    }
+    ck_assert_int_gt(nkeys, 70);
+    json_object_put(o);
+
+    /* an unknown option, or one without its argument, is named (exit 2) */
+    static const char *const bad[][2] = {
+        {"run --bogus", "--bogus"},       {"run --spacing", "--spacing"},
+        {"run -Z", "'Z'"},                {"batch --bogus x.yaml", "--bogus"},
+        {"check --bogus", "--bogus"},     {"bench --bogus", "--bogus"},
+        {"import --bogus", "--bogus"},    {"compare --bogus a.json b.json", "--bogus"}};
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        int st = tu_run_drape(bad[k][0], out, CAP, err, CAP);
+        ck_assert_msg(st == 2 && strstr(err, bad[k][1]) && strstr(err, "--help"),
+                      "drape %s: exit %d, %s", bad[k][0], st, err);
+    }
 }
 END_TEST
 

@@ -196,6 +196,130 @@ START_TEST(test_ensemble_failures)
 }
 END_TEST
 
+/* An ensemble's exit status.  Its input is checked once, before its
+ * specimens start: a bad fabric, an option the scene refuses, or energy
+ * terms without gravity for the fall give the single run's error, once,
+ * its exit status (1) and no result; specimens that all fail to write
+ * their output directory give that error's status (3), no result, and
+ * leave no directory of their own; a cantilever ensemble (no DC) that
+ * succeeds exits 0.  And a value of an option that the scene refuses is
+ * named as the option (exit 2), in run and batch; a static run's rest
+ * state keeps to the strain limit. */
+START_TEST(test_ensemble_input_errors)
+{
+    char args[4096];
+    const char *fab = tu_write_file("ens-bad-weight.yaml",
+                                    "fabric: bad weight\n"
+                                    "weight: abc\n");
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --fabric %s --spacing 3cm "
+             "--specimens 3 -j 1", fab);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 1, "exit %d, %s", st, err);
+    ck_assert_msg(out[0] == 0, "%s", out);
+    char *w = strstr(err, "ens-bad-weight.yaml:2:");
+    ck_assert_msg(w != NULL, "%s", err);
+    ck_assert_msg(strstr(w + 1, "ens-bad-weight.yaml:2:") == NULL, "printed twice: %s", err);
+
+    /* an option's value the scene refuses is named as the option (exit 2) */
+    st = tu_run_drape("run -q ../scenes/cusick.yaml --spacing 40cm --specimens 3 -j 1", out,
+                      CAP, err, CAP);
+    ck_assert_msg(st == 2 && out[0] == 0 && strstr(err, "--spacing: ") && !strstr(err, "cusick"),
+                  "exit %d, %s", st, err);
+    st = tu_run_drape("batch ../scenes/cusick.yaml ../fabrics/cotton-breen.yaml -q "
+                      "--spacing 40cm --out never-written", out, CAP, err, CAP);
+    ck_assert_msg(st == 2 && strstr(err, "--spacing: ") && access("never-written", F_OK) != 0,
+                  "exit %d, %s", st, err);
+    st = tu_run_drape("run --resume never-written --spacing 1cm", out, CAP, err, CAP);
+    ck_assert_msg(st == 2 && strstr(err, "got `--spacing'"), "exit %d, %s", st, err);
+
+    /* the strain limit holds for a static run's rest state */
+    st = tu_run_drape("run -q ../scenes/cusick.yaml --spacing 3cm --method static --specimens 1 "
+                      "--strain-limit 1e-6", out, CAP, err, CAP);
+    ck_assert_msg(st == 4 && strstr(err, "exceeds the strain limit 1e-06"), "exit %d, %s", st, err);
+
+    st = tu_run_drape("run -q ../scenes/cusick.yaml --spacing 3cm --specimens 3 -j 1 "
+                      "--terms stretch,bend,shear", out, CAP, err, CAP);
+    ck_assert_msg(st == 1 && out[0] == 0 && strstr(err, "terms: ") && strstr(err, "gravity"),
+                  "exit %d, %s", st, err);
+
+    /* DIR/specimen-00k are files: no specimen can write its frames */
+    char dir[900], cmd[4096];
+    snprintf(dir, sizeof dir, "%s/ens-out-blocked", tu_scratch_dir());
+    snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir %s && : > %s/specimen-001 && "
+             ": > %s/specimen-002", dir, dir, dir, dir);
+    ck_assert_int_eq(system(cmd), 0);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 2 -j 1 --out %s", dir);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3, "exit %d, %s", st, err);
+    ck_assert_msg(out[0] == 0, "%s", out);
+    ck_assert_msg(strstr(err, "every specimen failed (exit status 3)"), "%s", err);
+    snprintf(cmd, sizeof cmd, "test ! -e %s/shadow.svg && test \"$(ls %s | wc -l)\" -eq 2 && "
+             "rm -rf %s", dir, dir, dir);
+    ck_assert_int_eq(system(cmd), 0);
+
+    /* one specimen: its picture is written before its result is printed,
+     * in CSV too; a picture it cannot write leaves no result on stdout */
+    snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir -p %s/shadow.svg", dir, dir);
+    ck_assert_int_eq(system(cmd), 0);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 1 --out %s", dir);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3 && out[0] == 0 && strstr(err, "shadow.svg"), "exit %d, %s", st, err);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    ck_assert_int_eq(system(cmd), 0);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 1 --format csv --out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(cmd, sizeof cmd, "%s/shadow.svg", dir);
+    ck_assert_int_eq(xpath_count(cmd, "//s:polygon[@class='shadow']"), 1);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    ck_assert_int_eq(system(cmd), 0);
+
+    /* a cantilever has no DC: its ensemble succeeds when its specimens do */
+    st = tu_run_drape("run -q ../scenes/cantilever.yaml --method static --specimens 2 -j 1", out,
+                      CAP, err, CAP);
+    ck_assert_msg(st == 0 && !strstr(err, "failed"), "exit %d, %s", st, err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "%s", out);
+    ck_assert_int_eq((int)jnum(o, "specimens_failed"), 0);
+    ck_assert(isfinite(jnum(o, "tip_angle_deg")));
+    json_object_put(o);
+}
+END_TEST
+
+/* A fabric's name travels from each specimen's process to the ensemble
+ * whole, whatever it holds: a tab, a newline, a backslash. */
+START_TEST(test_ensemble_texts)
+{
+    FILE *fp = fopen("../fabrics/cotton-breen.yaml", "r");
+    ck_assert_ptr_nonnull(fp);
+    static char text[65536];
+    size_t len = 0;
+    char line[1024];
+    while (fgets(line, sizeof line, fp)) {
+        const char *l = strncmp(line, "fabric:", 7) == 0 ? "fabric: \"tab\\tnew\\nline\\\\end\"\n"
+                                                         : line;
+        ck_assert_uint_lt(len + strlen(l), sizeof text);
+        memcpy(text + len, l, strlen(l) + 1);
+        len += strlen(l);
+    }
+    fclose(fp);
+    char args[4096];
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --fabric %s --spacing 3cm "
+             "--method static --specimens 2 -j 1", tu_write_file("ens-name.yaml", text));
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "exit %d, %s", st, err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "%s", out);
+    json_object *f;
+    ck_assert(json_object_object_get_ex(o, "fabric", &f));
+    ck_assert_str_eq(json_object_get_string(f), "tab\tnew\nline\\end");
+    ck_assert_int_eq((int)jnum(o, "specimens_failed"), 0);
+    json_object_put(o);
+}
+END_TEST
+
 /* The scene keys: specimens, solver.method and the fall's time and step. */
 START_TEST(test_scene_keys)
 {
@@ -231,10 +355,22 @@ START_TEST(test_scene_keys)
     q = strstr(text, "method: fall");
     memcpy(q, "method: fast", 12);
     assert_scene_refused("ens-bad2.yaml", text, "ens-bad2.yaml:8:", "solver.method");
+    memcpy(q, "method: fall", 12);
+    /* a seed past 2^53 - 1, which a JSON number would not hold exactly */
+    char big[1100];
+    q = strstr(text, "seed: 3}");
+    snprintf(big, sizeof big, "%.*sseed: 9007199254740992}%s", (int)(q - text), text, q + 8);
+    assert_scene_refused("ens-bad3.yaml", big, "ens-bad3.yaml:6:", "perturbation.seed");
     /* the command line */
     ck_assert_int_eq(tu_run_drape("run --specimens 0", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("run -j x", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("run --seed -1", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --seed 9007199254740992", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --seed 18446744073709551615", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("batch --seed 9007199254740992 x.yaml", out, CAP, err, CAP), 2);
+    ck_assert_int_eq(tu_run_drape("run --seed 9007199254740991 --specimens 2", out, CAP, err, CAP),
+                     2);
+    ck_assert_msg(strstr(err, "2^53"), "%s", err);
     ck_assert_int_eq(tu_run_drape("run --fall-time 0s", out, CAP, err, CAP), 2);
 }
 END_TEST
@@ -591,6 +727,23 @@ START_TEST(test_compare_distributions)
     ck_assert_msg(p < 0.05 && jnum(o, "p_mean") > 0.05, "p_dc_dist %g, p_mean %g", p,
                   jnum(o, "p_mean"));
     json_object_put(o);
+
+    /* what is not a drape result is refused (exit 1), naming the file and
+     * the key or the place */
+    static const char *const bad[][2] = {
+        {"{\"dc\": 0.5, \"nodes\": 3} junk", "bad.json:1:"},
+        {"{\"specimens\": [{\"dc\": \"abc\", \"nodes\": 2}]}", "specimens[0].dc"},
+        {"{\"specimens\": [{\"dc\": true, \"nodes\": 2}]}", "specimens[0].dc"},
+        {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": 2.7}]}", "specimens[0].nodes"},
+        {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": -2}]}", "specimens[0].nodes"},
+        {"{\"specimens\": {\"dc\": 0.4}, \"dc\": 0.4}", "specimens"},
+        {"{\"dc\": 0.4, \"cpu_s\": \"x\"}", "cpu_s"}};
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        snprintf(args, sizeof args, "compare %s %s", tu_write_file("bad.json", bad[k][0]), pb);
+        int st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st == 1 && strstr(err, bad[k][1]) && out[0] == 0, "%s: exit %d, %s",
+                      bad[k][0], st, err);
+    }
 }
 END_TEST
 
@@ -620,6 +773,8 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_ensemble_statistics);
     tcase_add_test(tc, test_ensemble_csv);
     tcase_add_test(tc, test_ensemble_failures);
+    tcase_add_test(tc, test_ensemble_input_errors);
+    tcase_add_test(tc, test_ensemble_texts);
     tcase_add_test(tc, test_scene_keys);
     tcase_add_test(tc, test_fall_tol_keys);
     tcase_add_test(tc, test_openmp_inline);

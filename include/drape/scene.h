@@ -69,6 +69,10 @@ extern const char *const drape_method_names[];
 /* Repeated specimens (MODEL.md 6): at most this many per run. */
 #define DRAPE_SCENE_SPECIMENS_MAX 1000
 #define DRAPE_SCENE_SPECIMENS_MAX_TEXT "1000"
+/* The largest perturbation seed (scene and --seed), and of seed + k over an
+ * ensemble's specimens: 2^53 - 1, the largest integer a JSON number (a
+ * double) holds exactly. */
+#define DRAPE_SCENE_SEED_MAX 9007199254740991UL
 
 typedef enum drape_table_shape { DRAPE_TABLE_SQUARE, DRAPE_TABLE_ROUND } drape_table_shape;
 
@@ -78,6 +82,9 @@ typedef enum drape_table_shape { DRAPE_TABLE_SQUARE, DRAPE_TABLE_ROUND } drape_t
 typedef struct drape_scene_pos {
     int line, column;
 } drape_scene_pos;
+/* The line of a value given on the command line instead (--spacing): its
+ * errors name the option and are usage errors (exit 2). */
+#define DRAPE_SCENE_POS_COMMAND_LINE (-1)
 
 typedef struct drape_scene {
     char path[DRAPE_ERROR_FILE_MAX];        /* the scene file */
