@@ -86,7 +86,9 @@ const char *const drape_cli_run_keys[] = {
     /* nineteenth session: a refused longer step of the fall tried again */
     "fall_retry_s", "fall_refused",
     /* twenty-second session: a fall ended because it kept gaining energy */
-    "fall_pumped", NULL};
+    "fall_pumped",
+    /* twenty-third session: where a redone fall was taken up again */
+    "fall_redo_from_s", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -687,6 +689,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                          method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_refused : NAN);
     drape_cli_result_int(&r, "fall_pumped",
                          method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_pumped : NAN);
+    drape_cli_result_num(&r, "fall_redo_from_s",
+                         method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_redo_from : NAN);
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -80,7 +80,7 @@ static const key_rule key_rules[] = {
     {"energy_max_rise_J", R_MAX}, {"max_strain_peak", R_MAX}, {"energy_rescales", R_SUM},
     {"fall_end_s", R_MAX}, {"fall_steps", R_SUM}, {"energy_gain_J", R_MAX},
     {"fall_redone", R_SUM}, {"fall_refused", R_SUM},
-    {"fall_pumped", R_SUM}, {NULL, 0}};
+    {"fall_pumped", R_SUM}, {"fall_redo_from_s", R_MIN}, {NULL, 0}};
 
 static int rule_of(const char *key)
 {

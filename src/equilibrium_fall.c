@@ -29,9 +29,9 @@
  * fallen to half its peak (before that the peak so far is no scale for
  * the fall's energy), a step that leaves the total energy more than this
  * fraction of the peak kinetic energy above its lowest value so far ends
- * the fall, and the specimen falls again from the start with its step
- * chosen by its error (dyn_redo_tol, as when the energy rises above its
- * start: equilibrium.c).  The model dissipates: energy that the fall
+ * the fall, and the specimen's fall goes on from the state of its lowest
+ * total energy with its step chosen by its error (dyn_redo_tol, as when
+ * the energy rises above its start: equilibrium.c).  The model dissipates: energy that the fall
  * keeps gaining is its linearly implicit step's, whose matrix drops the
  * compressed springs' negative stiffness.  Measured on the table scene
  * at 1 cm: seeds 11 and 12 gain 43 % and 67 % of the peak kinetic energy
@@ -74,6 +74,25 @@ static double total_energy(eq_work *w, const double *x, const double *v)
     w->r->force_evals++;
     if (drape_model_energy(w->m, x, &E) != 0) return INFINITY;
     return kinetic_energy(w, v) + E.stretch + E.bend + E.shear + E.gravity;
+}
+
+/* The fall's state and record at time t, into *s. */
+static void fall_record(const eq_work *w, eq_fall_state *s, const double *x,
+                        const double *v, double t, double ke_peak, double ke_win)
+{
+    size_t n3 = 3 * (size_t)w->L->n;
+    const drape_equilibrium_result *r = w->r;
+    memcpy(s->x, x, sizeof(double) * n3);
+    memcpy(s->v, v, sizeof(double) * n3);
+    s->t = t;
+    s->e_start = r->dyn_e_start;
+    s->e_max = r->dyn_e_max;
+    s->e_max_rise = r->dyn_e_max_rise;
+    s->dt_min = r->dyn_dt_min;
+    s->dt_max = r->dyn_dt_max;
+    s->ke_peak = ke_peak;
+    s->ke_win = ke_win;
+    s->steps = r->dyn_steps;
 }
 
 /* (E9) Damped implicit dynamics: M x'' = f(x, v) (all of the model's
@@ -119,9 +138,13 @@ static double total_energy(eq_work *w, const double *x, const double *v)
  * Returns 0, 1 (folded or too small a step), 2 (stop raised), 3 (a
  * fixed-step fall whose total energy rose above its start, or kept
  * rising at its shorter step (DRAPE_EQ_PUMP_RISE, r->dyn_pumped), with
- * o->dyn_redo_tol > 0: x is then a state of no use) or -1 (err set). */
+ * o->dyn_redo_tol > 0: x is then a state of no use, and *low, if given,
+ * the state of the lowest total energy, from which the caller goes on) or
+ * -1 (err set).  From a state *from (the caller's *low of an earlier
+ * fall), the fall's time, record and peak kinetic energy go on from
+ * there, its swing window empty. */
 int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
-            drape_error *err)
+            const eq_fall_state *from, eq_fall_state *low, drape_error *err)
 {
     unsigned parts_all = drape_model_parts(w->m);
     const drape_lattice *L = w->L;
@@ -137,8 +160,10 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     const double h_min = o->dyn_dt / 64.0, h_max = 8.0 * o->dyn_dt;
     size_t n3 = 3 * (size_t)L->n;
     double *xp = w->xz, *vp = w->fz, *x0 = w->xt, *v = w->vel;  /* previous step, trial */
-    memset(v, 0, sizeof(double) * n3);
-    double t = 0.0, ke_peak = 0.0, ke_win = 0.0, tw = 0.2 * T;
+    if (from) memcpy(v, from->v, sizeof(double) * n3);
+    else memset(v, 0, sizeof(double) * n3);
+    double t = from ? from->t : 0.0, ke_peak = from ? from->ke_peak : 0.0;
+    double ke_win = 0.0, tw = 0.2 * T;
     /* the kinetic energy's largest value over the last tw = T / 5 (two
      * pendulum times of the Cusick fall), so that a swing's turning point
      * does not end the fall: a ring of the last nwin steps' (t, E_kin),
@@ -153,6 +178,11 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         ring[k] = 0.0;
         ring_t[k] = -INFINITY;
     }
+    if (from) { /* the window's largest kinetic energy so far, as if at t */
+        ring[0] = ke_win = from->ke_win;
+        ring_t[0] = t;
+        iw = 1 % nwin;
+    }
     int have_prev = 0, swinging = 0, long_step = 0;
     double h_fall = h, e_low = INFINITY; /* the lowest total energy at the long step */
     double h_prev = 0.0;                 /* the last step taken */
@@ -160,17 +190,28 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     double t_retry = INFINITY, h_retry = 0.0;
     int retries = 0; /* retries left for the present longer step */
     int rc = 0;
-    r->dyn_steps = 0;
-    r->dyn_dt_min = INFINITY;
-    r->dyn_dt_max = 0.0;
     double e_prev = total_energy(w, x, v);
-    r->dyn_e_start = r->dyn_e_end = r->dyn_e_max = e_prev;
-    r->dyn_e_max_rise = NAN;
+    if (from) { /* the record of the fall up to from->t goes on */
+        r->dyn_steps = from->steps;
+        r->dyn_dt_min = from->dt_min;
+        r->dyn_dt_max = from->dt_max;
+        r->dyn_e_start = from->e_start;
+        r->dyn_e_max = from->e_max;
+        r->dyn_e_max_rise = from->e_max_rise;
+    } else {
+        r->dyn_steps = 0;
+        r->dyn_dt_min = INFINITY;
+        r->dyn_dt_max = 0.0;
+        r->dyn_e_start = r->dyn_e_max = e_prev;
+        r->dyn_e_max_rise = NAN;
+    }
+    r->dyn_e_end = e_prev;
     double e_low_all = e_prev; /* the lowest total energy so far */
     /* the largest kinetic energy so far, and whether it has since fallen
      * to half of that (the pump guard's scale, and when it starts) */
-    double ke_max = 0.0;
+    double ke_max = ke_peak;
     int ke_fell = 0;
+    if (low) fall_record(w, low, x, v, t, ke_max, ke_win);
     for (;;) {
         /* the folds have formed: on at dyn_dt, or at the same fraction of
          * it if the fold phase's step was halved; the first longer step is
@@ -403,7 +444,6 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             rc = 3;
             break;
         }
-        if (e_now < e_low_all) e_low_all = e_now;
         double ke = kinetic_energy(w, v);
         if (ke > ke_max) ke_max = ke;
         else if (ke < 0.5 * ke_max) ke_fell = 1;
@@ -425,6 +465,10 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         if (!isnan(rise) && !(rise <= r->dyn_e_max_rise)) r->dyn_e_max_rise = rise;
         if (!(e_now <= r->dyn_e_max)) r->dyn_e_max = e_now;
         e_prev = r->dyn_e_end = e_now;
+        if (e_now < e_low_all) {
+            e_low_all = e_now;
+            if (low) fall_record(w, low, x, v, t, ke_max, ke_win);
+        }
     }
     drape_free(ring);
     r->dyn_end = t;

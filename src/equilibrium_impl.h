@@ -52,11 +52,27 @@ int eq_factorize(eq_work *w, drape_error *err);
 /* out = A^-1 rhs (N numbers; out may be rhs).  0, or -1 with err set. */
 int eq_solve(eq_work *w, const double *rhs, double *out, drape_error *err);
 
+/* A state of a fall, from which another fall can go on: the fixed-step
+ * fall records the one of its lowest total energy, where a second fall
+ * under error control takes over (equilibrium_fall.c). */
+typedef struct eq_fall_state {
+    double *x, *v;      /* 3n each, the caller's buffers */
+    double t;           /* s since the fall began */
+    double e_start;     /* J: total energy at the fall's start */
+    double e_max, e_max_rise, dt_min, dt_max; /* the fall's record up to t */
+    double ke_peak;     /* J: the largest kinetic energy up to t */
+    double ke_win;      /* J: the largest over the swing criterion's window
+                           that ends at t */
+    int steps;          /* steps up to t */
+} eq_fall_state;
+
 /* (E9) The fall: damped implicit dynamics of x (3n, updated in place)
- * from rest for o->dyn_time, then on while the cloth swings (up to T_max);
- * fills w->r's dyn_* fields.  Returns 0, 1 (folded or too small a step),
- * 2 (stop raised) or -1 (err set).  equilibrium_fall.c. */
+ * from rest (from NULL) or from the state *from (x must hold from->x),
+ * for o->dyn_time, then on while the cloth swings (up to T_max); fills
+ * w->r's dyn_* fields; with low given, records there the state of the
+ * lowest total energy.  Returns 0, 1 (folded or too small a step),
+ * 2 (stop raised), 3 (see equilibrium_fall.c) or -1 (err set). */
 int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
-            drape_error *err);
+            const eq_fall_state *from, eq_fall_state *low, drape_error *err);
 
 #endif

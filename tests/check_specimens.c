@@ -508,8 +508,9 @@ START_TEST(test_fall_tol_keys)
     ck_assert_int_eq((int)steps[2], 40);
     /* at twice that step the fixed-step fall of this coarse lattice pumps
      * energy (its total climbs above its start at 0.14 s, sixteenth
-     * session): it is stopped and the specimen falls again under error
-     * control at 30 um (fall_redone), which gains none */
+     * session): it is stopped and the specimen's fall goes on under error
+     * control at 30 um (fall_redone) from the fixed-step fall's state of
+     * lowest total energy, and gains none */
     snprintf(text, sizeof text,
              "scene: cusick\nfabric: %s/../fabrics/cotton-breen.yaml\n"
              "specimen: {shape: circle, diameter: 30 cm}\nsupport: {diameter: 18 cm}\n"
@@ -526,20 +527,21 @@ START_TEST(test_fall_tol_keys)
         ck_assert_msg(jnum(o, "fall_redone") == 1.0 && jnum(o, "energy_gain_J") == 0.0,
                       "redone %g, gain %g J", jnum(o, "fall_redone"), jnum(o, "energy_gain_J"));
         ck_assert(jnum(o, "energy_total_end_J") < jnum(o, "energy_total_start_J"));
-        /* the second fall starts afresh: the same specimen, bit for bit, as
-         * an error-controlled fall from the start at the same tolerance
-         * (3e-5 m as a bare number: "30 um" parses to 30 * 1e-6, one unit
-         * in the last place below 30e-6) */
+        /* taken up inside the fall, before its energy rose above the
+         * start; the fall's record goes on from its flat start: the same
+         * start energy, bit for bit, as an error-controlled fall from the
+         * start (3e-5 m as a bare number: "30 um" parses to 30 * 1e-6, one
+         * unit in the last place below 30e-6) */
+        double from = jnum(o, "fall_redo_from_s");
+        ck_assert_msg(from > 0.0 && from < 0.14, "taken up at %g s", from);
         snprintf(args, sizeof args, "run -q %s --fall-tol 3e-5 --fall-fold-time 0", scene);
         ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
         json_object *t = json_tokener_parse(out);
         ck_assert_msg(t != NULL, "%s", out);
-        ck_assert(jnum(t, "fall_redone") == 0.0);
-        const char *same[] = {"dc", "max_force_rel", "energy_total_end_J", "fall_steps",
-                              "fall_end_s", "iterations"};
-        for (int k = 0; k < 6; k++)
-            ck_assert_msg(jnum(o, same[k]) == jnum(t, same[k]), "%s: %.17g redone, %.17g",
-                          same[k], jnum(o, same[k]), jnum(t, same[k]));
+        ck_assert(jnum(t, "fall_redone") == 0.0 && isnan(jnum(t, "fall_redo_from_s")));
+        ck_assert_msg(jnum(o, "energy_total_start_J") == jnum(t, "energy_total_start_J"),
+                      "start %.17g redone, %.17g", jnum(o, "energy_total_start_J"),
+                      jnum(t, "energy_total_start_J"));
         json_object_put(t);
         json_object_put(o);
     }
@@ -659,9 +661,11 @@ END_TEST
  * times, 2,560 steps, 29 CPU s; twenty-second session, docs/ensemble.md
  * "The fall that pumps energy").  The same table at 2 cm, seed 6, is the
  * cheap case tested here: one fall step raised the total energy by 2.5 mJ,
- * 14 % of all that the fall dissipates.  The model dissipates: after the
- * second fall no step may gain 0.1 % of that, nothing above the start,
- * and the static solver must certify a minimum.  (A fall that does not
+ * 14 % of all that the fall dissipates.  The model dissipates: over the
+ * fall as taken (the fixed-step one up to its lowest total energy, whose
+ * BDF2 steps are not energy-monotone, the error-controlled one from
+ * there) no step may gain 1 % of that, nothing above the start, and the
+ * static solver must certify a minimum.  (A fall that does not
  * pump is not touched: test_fall_energy_balance, seed 3.) */
 START_TEST(test_fall_pumped)
 {
@@ -676,11 +680,19 @@ START_TEST(test_fall_pumped)
     double rise = jnum(o, "energy_max_rise_J");
     ck_assert_msg(jnum(o, "fall_pumped") == 1.0 && jnum(o, "fall_redone") == 1.0,
                   "pumped %g, redone %g", jnum(o, "fall_pumped"), jnum(o, "fall_redone"));
-    ck_assert_msg(e1 < e0 - 1e-2 && rise < 1e-3 * (e0 - e1), "E %g -> %g J, largest rise %g J",
+    ck_assert_msg(e1 < e0 - 1e-2 && rise < 1e-2 * (e0 - e1), "E %g -> %g J, largest rise %g J",
                   e0, e1, rise);
     ck_assert_msg(jnum(o, "energy_gain_J") == 0.0, "gained %g J", jnum(o, "energy_gain_J"));
     ck_assert_msg(jnum(o, "fall_end_s") < 2.0 * jnum(o, "fall_time_s"), "fall to %g s",
                   jnum(o, "fall_end_s"));
+    /* the error-controlled fall took over inside the fall, where the
+     * fixed-step one's energy was lowest; the steps before it count (each
+     * at most twice the fall step) */
+    double from = jnum(o, "fall_redo_from_s");
+    ck_assert_msg(from > 0.0 && from < jnum(o, "fall_end_s"), "taken up at %g s of %g s", from,
+                  jnum(o, "fall_end_s"));
+    ck_assert_msg(jnum(o, "fall_steps") >= from / (2.0 * jnum(o, "fall_step_s")),
+                  "%g steps to %g s", jnum(o, "fall_steps"), from);
     const char *cert = json_object_get_string(json_object_object_get(o, "certified"));
     ck_assert_msg(cert && strcmp(cert, "minimum") == 0, "%s", cert ? cert : "null");
     json_object_put(o);

@@ -110,9 +110,10 @@ typedef struct drape_equilibrium_opts {
                             total energy climbs above its value at the
                             start (energy the model cannot have: its
                             linearly implicit step pumped it) is stopped
-                            there and the dynamics are done again from the
-                            start with dyn_tol = dyn_redo_tol (dyn_redone
-                            = 1); 0 = off */
+                            there and the dynamics go on from the state of
+                            its lowest total energy with dyn_tol =
+                            dyn_redo_tol (dyn_redone = 1, dyn_redo_from);
+                            0 = off */
     int dyn_only;        /* 1: return after the damped dynamics (status
                             DRAPE_EQ_DYN_ONLY, x the state at dyn_time) */
     int certify;         /* 1: factor the exact Hessian at the end (default) */
@@ -156,6 +157,9 @@ typedef struct drape_equilibrium_result {
     int dyn_steps;        /* damped dynamics steps */
     int dyn_redone;       /* 1: the fixed-step fall gained energy and the
                              dynamics were done again with dyn_redo_tol */
+    double dyn_redo_from; /* s: where they were taken up again (the state
+                             of the fixed-step fall's lowest total energy);
+                             NAN when not redone */
     int dyn_refused;      /* steps refused because the total energy rose:
                              swing steps at dyn_dt_swing (then dyn_dt on,
                              until dyn_retry), dyn_dt after the fold phase
