@@ -32,6 +32,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <stdint.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -116,18 +117,69 @@ static void fmt_num(char *buf, size_t n, double v)
     }
 }
 
-/* YAML double-quoted scalar. */
+/* Length of the valid UTF-8 sequence at c (1-4), or 0 where the byte there
+ * does not start one (RFC 3629: no overlong forms, no surrogates, at most
+ * U+10FFFF). */
+static int utf8_len(const unsigned char *c)
+{
+    if (c[0] < 0x80) return 1;
+    int n = c[0] >= 0xc2 && c[0] <= 0xdf ? 2 : c[0] >= 0xe0 && c[0] <= 0xef ? 3
+            : c[0] >= 0xf0 && c[0] <= 0xf4 ? 4 : 0;
+    for (int k = 1; k < n; k++)
+        if ((c[k] & 0xc0) != 0x80) return 0;
+    if ((c[0] == 0xe0 && c[1] < 0xa0) || (c[0] == 0xed && c[1] > 0x9f) ||
+        (c[0] == 0xf0 && c[1] < 0x90) || (c[0] == 0xf4 && c[1] > 0x8f))
+        return 0;
+    return n;
+}
+
+static int utf8_valid(const char *s)
+{
+    for (const unsigned char *c = (const unsigned char *)s; *c;) {
+        int n = utf8_len(c);
+        if (!n) return 0;
+        c += n;
+    }
+    return 1;
+}
+
+/* YAML double-quoted scalar; a byte that is not UTF-8 (a file name's, say)
+ * as \xHH (YAML reads it as the code point U+00HH). */
 static void put_quoted(FILE *f, const char *s)
 {
     fputc('"', f);
-    for (const unsigned char *c = (const unsigned char *)s; *c; c++) {
+    for (const unsigned char *c = (const unsigned char *)s; *c;) {
+        int n = utf8_len(c);
         if (*c == '"' || *c == '\\') fprintf(f, "\\%c", *c);
         else if (*c == '\n') fputs("\\n", f);
         else if (*c == '\t') fputs("\\t", f);
-        else if (*c < 0x20 || *c == 0x7f) fprintf(f, "\\x%02x", *c);
-        else fputc(*c, f);
+        else if (*c < 0x20 || *c == 0x7f || n == 0) fprintf(f, "\\x%02x", *c);
+        else fwrite(c, 1, (size_t)n, f);
+        c += n ? n : 1;
     }
     fputc('"', f);
+}
+
+/* Text for a comment line: control characters and bytes that are not
+ * UTF-8 as '?'. */
+static void put_comment_text(FILE *f, const char *s)
+{
+    for (const unsigned char *c = (const unsigned char *)s; *c;) {
+        int n = utf8_len(c);
+        if (*c < 0x20 || *c == 0x7f || n == 0) fputc('?', f);
+        else fwrite(c, 1, (size_t)n, f);
+        c += n ? n : 1;
+    }
+}
+
+/* 1 for an integer that json-c clamped to its 64-bit range when it parsed
+ * it (99999999999999999999999 reads as 2^64 - 1 and -1e23 as -2^63): the
+ * number in the file is not the one it holds. */
+static int json_int_clamped(json_object *v)
+{
+    if (!json_object_is_type(v, json_type_int)) return 0;
+    int64_t i = json_object_get_int64(v);
+    return i == INT64_MAX || i == INT64_MIN || json_object_get_uint64(v) == UINT64_MAX;
 }
 
 static const char *base_name(const char *path)
@@ -176,9 +228,15 @@ static output *start_output(importer *im, const char *name, const char *label,
         report(im, &e);
         return NULL;
     }
-    if (!im->force && access(path, F_OK) == 0) {
+    struct stat st;
+    if (lstat(path, &st) == 0 && (!im->force || !S_ISREG(st.st_mode))) {
+        /* --force replaces files, never a directory, link or device: all
+         * outputs are checked before any is written */
         drape_error_set(&e, DRAPE_E_IO, path, 0, 0, NULL,
-                        "exists (made from %s); use --force to replace it", label);
+                        S_ISREG(st.st_mode) ? "exists (made from %s); use --force to replace it"
+                                            : "exists and is not a regular file (made from %s); "
+                                              "not replaced",
+                        label);
         report(im, &e);
         return NULL;
     }
@@ -292,9 +350,10 @@ static int json_matrix(json_object *root, const char *key, int rows, int cols,
                 return drape_error_set(e, DRAPE_E_INPUT, file, 0, 0, kp,
                                        "expected a number, got %s", json_type_word(v));
             double x = json_object_get_double(v);
-            if (!isfinite(x))
+            if (!isfinite(x) || json_int_clamped(v))
                 return drape_error_set(e, DRAPE_E_INPUT, file, 0, 0, kp,
-                                       "expected a finite number");
+                                       "expected a finite number%s",
+                                       isfinite(x) ? " (this integer is out of range)" : "");
             out[r * cols + c] = x;
         }
     }
@@ -369,6 +428,11 @@ static int arcsim_read(const char *path, arcsim_mat *m, drape_error *e)
         goto out;
     }
     m->density = json_object_get_double(v);
+    if (json_int_clamped(v)) {
+        drape_error_set(e, DRAPE_E_INPUT, path, 0, 0, "density",
+                        "this integer is out of range");
+        goto out;
+    }
     if (!(m->density > 0) || !isfinite(m->density)) {
         drape_error_set(e, DRAPE_E_INPUT, path, 0, 0, "density",
                         "must be a positive areal density (kg/m^2), got %g", m->density);
@@ -466,7 +530,7 @@ static void arcsim_write(FILE *f, const char *name, const char *path, const arcs
     fmt_num(kf, sizeof kf, 2.0 * m->stretch[0][0]);
     fmt_num(G, sizeof G, m->stretch[0][3]);
     fprintf(f, "# %s: ARCSim material file ", name);
-    for (const char *c = file; *c; c++) fputc((unsigned char)*c < 0x20 ? '?' : *c, f);
+    put_comment_text(f, file);
     fputs(", converted by `drape import arcsim`.\n"
           "# Conversion (from ARCSim's code, docs/fabric-library.md), as for the\n"
           "# shipped *-wang fabrics:\n"
@@ -725,6 +789,7 @@ static void kes_row(importer *im, const char *file, const drape_cli_csv_rec *r,
         if (!kes_cols[k].unit) {
             if (strlen(cell[k]) > IMPORT_TEXT_MAX)
                 ROW_ERR(k, "longer than %d bytes", IMPORT_TEXT_MAX);
+            if (!utf8_valid(cell[k])) ROW_ERR(k, "not valid UTF-8 (save the table as UTF-8)");
             continue;
         }
         if (!plain_number(cell[k])) ROW_ERR(k, "expected a number in %s, got \"%s\"",
@@ -753,10 +818,11 @@ static void kes_row(importer *im, const char *file, const drape_cli_csv_rec *r,
     output *o = start_output(im, cell[K_NAME], label, file, r->line, "name");
     if (!o) return;
     FILE *f = o->a.f;
-    fprintf(f, "# %s: KES-F summary values from %s, converted by `drape import kes`.\n"
-               "# The bending and shear curves are built from B, 2HB, G, 2HG (2HG5) by\n"
-               "# drape's KES construction (docs/fabrics.md, \"KES-F summary values\").\n",
-            cell[K_NAME], label);
+    fprintf(f, "# %s: KES-F summary values from ", cell[K_NAME]);
+    put_comment_text(f, label);
+    fputs(", converted by `drape import kes`.\n"
+          "# The bending and shear curves are built from B, 2HB, G, 2HG (2HG5) by\n"
+          "# drape's KES construction (docs/fabrics.md, \"KES-F summary values\").\n", f);
     fprintf(f, "fabric: %s\n", cell[K_NAME]);
     if (cell[K_DESC]) {
         fputs("description: ", f);

@@ -218,6 +218,8 @@ START_TEST(test_arcsim_errors)
          "[1,2,3,4],[1,2,3,4]], \"bending\": [[1,1,1,1,1],[1,1,1,1,1],[1,1,1,1,1]]}",
          "stretching[0][2]: k_v/2 (tension along v) must be positive"},
         {"{\"density\": 0.1} {}", "text after the end of the JSON object"},
+        /* json-c clamps it to 2^64 - 1: not the number in the file */
+        {"{\"density\": 99999999999999999999999}", "density: this integer is out of range"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const char *path = tu_write_file("bad.json", cases[i].text);
@@ -241,6 +243,32 @@ START_TEST(test_arcsim_errors)
     ck_assert_ptr_nonnull(strstr(err, "--force"));
     snprintf(args, sizeof args, "import arcsim data/denim-arcsim.json --out-dir %s --force", dir);
     ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    /* --force replaces files only, and checks every output before it
+     * writes any: a directory where one output goes -> nothing written */
+    char sub[1200];
+    snprintf(sub, sizeof sub, "%s/royal-target-arcsim.yaml", dir);
+    ck_assert_int_eq(mkdir(sub, 0755), 0);
+    snprintf(args, sizeof args, "import arcsim data/denim-arcsim.json data/royal-target-arcsim.json "
+             "--out-dir %s --force", dir);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3 && strstr(err, "not a regular file") && strstr(err, "no file written") &&
+                  out[0] == 0, "exit %d, %s", st, err);
+    ck_assert_int_eq(rmdir(sub), 0);
+    /* a file name that is not UTF-8 still makes a valid fabric file */
+    {
+        char bytes[16384];
+        FILE *fp = fopen("data/denim-arcsim.json", "rb");
+        ck_assert_ptr_nonnull(fp);
+        size_t n = fread(bytes, 1, sizeof bytes, fp);
+        fclose(fp);
+        const char *lat = tu_write_bytes("caf\xe9.json", bytes, n);
+        snprintf(args, sizeof args, "import arcsim '%s' --out-dir %s", lat, dir);
+        st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st == 0, "exit %d, %s", st, err);
+        snprintf(args, sizeof args, "check %s/caf-.yaml", dir);
+        st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st == 0 && strstr(out, "valid fabric"), "exit %d, %s", st, err);
+    }
     /* command line */
     ck_assert_int_eq(tu_run_drape("import", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("import xml data/kes.csv", out, CAP, err, CAP), 2);
@@ -323,6 +351,8 @@ START_TEST(test_kes_errors)
          "ok,100,1,1,0.1,0.1,1,1,2,1\n", "2HG5_warp: 2HG5 (hysteresis at 5 deg) is smaller", 0},
         {"\"ok,100\n", "t.csv:2:1: unterminated quoted field", 1},
         {"", "t.csv: no rows after the header", 1},
+        {"name,weight_g_m2,k_warp_N_m,k_weft_N_m,B_warp,B_weft,G_warp,G_weft,description\n"
+         "ok,100,1,1,0.1,0.1,1,1,caf\xe9\n", "t.csv:2:24: description: not valid UTF-8", 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         char text[1024];
