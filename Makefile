@@ -191,9 +191,9 @@ DOC_FILES  = README.md $(shell find docs -type f | LC_ALL=C sort)
 # (the installed binary is $(O)/drape, the same objects as ./drape, so
 # that `make install O=... PREFIX=...` leaves the checkout's ./drape alone)
 install: $(O)/drape $(O)/drape.1
-	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(MAN1DIR)
-	install -m 755 $(O)/drape $(DESTDIR)$(BINDIR)/drape
-	install -m 644 $(O)/drape.1 $(DESTDIR)$(MAN1DIR)/drape.1
+	install -d "$(DESTDIR)$(BINDIR)" "$(DESTDIR)$(MAN1DIR)"
+	install -m 755 $(O)/drape "$(DESTDIR)$(BINDIR)/drape"
+	install -m 644 $(O)/drape.1 "$(DESTDIR)$(MAN1DIR)/drape.1"
 	@for f in $(DATA_FILES); do \
 	  install -D -m 644 "$$f" "$(DESTDIR)$(DATADIR)/$$f" || exit 1; done
 	@for f in $(DOC_FILES); do \
@@ -201,14 +201,19 @@ install: $(O)/drape $(O)/drape.1
 	@echo "installed drape in $(DESTDIR)$(BINDIR), data in $(DESTDIR)$(DATADIR)," \
 	  "docs in $(DESTDIR)$(DOCDIR), drape.1 in $(DESTDIR)$(MAN1DIR)"
 
-# Exactly what install wrote (the same lists), then the directories of
-# drape's own that are left empty.
+# Exactly what install wrote (the same lists), then drape's own
+# directories left empty: the trees fabrics/, scenes/ (DATADIR) and docs/
+# (DOCDIR), then DATADIR and DOCDIR themselves if empty.  Only those:
+# DATADIR and DOCDIR may be shared directories such as /usr/share/doc,
+# whose other empty directories are not drape's to remove.
 uninstall:
-	rm -f $(DESTDIR)$(BINDIR)/drape $(DESTDIR)$(MAN1DIR)/drape.1
+	rm -f "$(DESTDIR)$(BINDIR)/drape" "$(DESTDIR)$(MAN1DIR)/drape.1"
 	@for f in $(DATA_FILES); do rm -f "$(DESTDIR)$(DATADIR)/$$f"; done
 	@for f in $(DOC_FILES); do rm -f "$(DESTDIR)$(DOCDIR)/$$f"; done
-	@for d in $(DESTDIR)$(DATADIR) $(DESTDIR)$(DOCDIR); do \
+	@for d in "$(DESTDIR)$(DATADIR)/fabrics" "$(DESTDIR)$(DATADIR)/scenes" \
+	          "$(DESTDIR)$(DOCDIR)/docs"; do \
 	  if [ -d "$$d" ]; then find "$$d" -depth -type d -empty -delete; fi; done
+	@rmdir "$(DESTDIR)$(DATADIR)" "$(DESTDIR)$(DOCDIR)" 2>/dev/null || :
 
 # A staged install (DESTDIR) used from another directory, its manual
 # page rendered, and the uninstall (scripts/check-install.sh).

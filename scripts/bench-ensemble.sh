@@ -93,8 +93,9 @@ mkdir -p "$OUT"
 # bias curves since issue 18, which the shipped Cusick scene uses; their
 # reference ensembles were made without, so both runs leave the term out.
 SEED_TERMS="--terms stretch,bend,shear,gravity"
-case_args() {
-    printf '%s ' "$(case_args_model "$1")" "$DARGS"
+case_args() { # (an unknown case stops the bench: exit 2 in the $() alone would not)
+    m=$(case_args_model "$1") || exit 2
+    printf '%s ' "$m" "$DARGS"
 }
 case_args_model() {
     case "$1" in

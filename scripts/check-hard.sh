@@ -56,7 +56,9 @@ if [ ! -x "$bin" ]; then
     exit 2
 fi
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/drape-hard.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT INT TERM
+trap 'rm -rf "$tmp"' EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 # h5scan reads drape.h5 independently of drape (tests/hard/h5scan.c).
 if ! cc -std=c99 -D_POSIX_C_SOURCE=200809L -O2 $(pkg-config --cflags hdf5-serial) \
         -o "$tmp/h5scan" tests/hard/h5scan.c $(pkg-config --libs hdf5-serial) -lm; then

@@ -131,7 +131,9 @@ t_run=$(date +%s)
 lrc=$?
 [ "$lrc" = 6 ] || fail "local drape batch exit status $lrc, expected 6"
 strip() { # blank the timing columns wall_s and cpu_s (no field before them holds a comma)
-    awk -F, -v OFS=, 'NR == 1 { for (i = 1; i <= NF; i++) { if ($i == "wall_s") c = i; if ($i == "cpu_s") d = i } } { $c = ""; $d = ""; print }' "$1"
+    awk -F, -v OFS=, 'NR == 1 { for (i = 1; i <= NF; i++) { if ($i == "wall_s") c = i; if ($i == "cpu_s") d = i }
+                               if (!c || !d) { print "check-slurm: no wall_s or cpu_s column" > "/dev/stderr"; exit 1 } }
+                      { $c = ""; $d = ""; print }' "$1"
 }
 if ! diff <(strip "$w/local/results.csv") <(strip "$w/out/results.csv") >&2; then
     fail "merged rows differ from a local batch"

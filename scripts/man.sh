@@ -30,16 +30,26 @@ roff() {
     sed -e 's/\\/\\e/g' -e 's/^\([.'"'"']\)/\\\&\1/' -e 's/-/\\-/g'
 }
 
+# each command's help once, into a file: a command whose --help fails
+# stops the page (inside a pipeline below its status would be lost)
+for c in $COMMANDS; do
+    "$DRAPE" "$c" --help > "$TMP/$c.help" || {
+        p "man.sh: \`$DRAPE $c --help' failed" >&2
+        exit 1
+    }
+    [ -s "$TMP/$c.help" ] || { p "man.sh: \`$DRAPE $c --help' printed nothing" >&2; exit 1; }
+done
+
 {
     p "[NAME]"
     p "drape \\- simulate the drape of woven fabrics from Kawabata (KES\\-F) data"
     p ""
     p "[SYNOPSIS]"
     for c in $COMMANDS; do
-        "$DRAPE" "$c" --help | awk '
+        awk '
             /^Usage: / { sub(/^Usage: /, ""); print; on = 1; next }
             on && /^       drape / { sub(/^ +/, ""); print; next }
-            { on = 0 }' |
+            { on = 0 }' "$TMP/$c.help" |
         roff | sed -e 's/^drape \([a-z]*\)\(.*\)$/\\fBdrape \1\\fR\2\n.br/'
     done
     p "\\fBdrape\\fR \\-\\-help | \\-\\-version"
@@ -49,7 +59,7 @@ roff() {
     for c in $COMMANDS; do
         p ".SS \"drape $c\""
         p ".nf"
-        "$DRAPE" "$c" --help | roff
+        roff < "$TMP/$c.help"
         p ".fi"
     done
     p ""
@@ -76,7 +86,7 @@ roff() {
     p ".TP"
     p ".I $DATADIR/scenes/"
     p "the shipped scenes: cusick.yaml (the default drape test), table.yaml,"
-    p "hang.yaml, cantilever.yaml"
+    p "hang.yaml, cantilever.yaml, cantilever\-bias.yaml"
     p ".TP"
     p ".I $DATADIR/fabrics/"
     p "the shipped fabric library (Kawabata and ARCSim\\-converted fabrics)"

@@ -772,7 +772,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (interrupted) {
         int sig = stop_signal;
         if (rc.progress) fputc('\n', stderr); /* end the progress line */
-        if (method_static)
+        if (child)
+            ; /* a specimen: the ensemble reports it (and that it is not resumable) */
+        else if (method_static)
             fprintf(stderr, "drape: run interrupted by %s during the static solve; nothing "
                     "written\n", signal_name(sig));
         else if (out_dir)

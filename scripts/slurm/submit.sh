@@ -43,7 +43,7 @@ while [ $# -gt 0 ]; do
     --out=*) out=${1#--out=}; shift ;;
     --resume) resume=1; shift ;;
     --max-parallel) [ $# -ge 2 ] || usage; throttle=$2; shift 2 ;;
-    -h|--help) sed -n '2,33p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,/^[^#]/p' "$0" | sed -e '$d' -e 's/^# \{0,1\}//'; exit 0 ;;
     -*) echo "submit.sh: unknown option $1" >&2; usage ;;
     *) break ;;
     esac
