@@ -5,6 +5,7 @@
 #   make / all     build ./drape
 #   make run       run the default scene (scenes/cusick.yaml)
 #   make check     build and run the Check test suite
+#   make unit      the Check suite without rebuilding ./drape
 #   make check-slurm  test scripts/slurm/ on a real single-node Slurm (root;
 #                  installs slurm-wlm and munge; docs/batch.md)
 #   make bench-quick  integrators on the default scenes -> docs/integrators.md
@@ -15,10 +16,15 @@
 #   make check-hard  the hard-case suite tests/hard/ (docs/stability.md)
 #   make check-default  the default Cusick scene, dynamic at 1 cm, must reach
 #                  equilibrium (~150 s CPU; in CI)
+#   make check-install  a staged install used from elsewhere, its man page,
+#                  uninstall (in CI)
+#   make bench-animate  the animate method against backward Euler (issue 16)
+#   make validate  validation against analytic and reference solutions
 #   make asan      ASan+UBSan build in build/asan, all suites + a small run
 #   make valgrind  memcheck: drape check/run and the loader suites
 #   make fuzz      fuzz the fabric and scene loaders (FUZZ_TIME=30 s each)
-#   make install   install drape into $(DESTDIR)$(PREFIX)/bin
+#   make install   install drape into $(DESTDIR)$(PREFIX)/bin (data, docs,
+#                  drape.1 too; docs/install.md); make uninstall removes it
 #   make clean
 
 CC      ?= cc
