@@ -626,7 +626,7 @@ static void import_arcsim(importer *im, int nfiles, char **files, const char *na
         } else {
             const char *b = base_name(path);
             size_t n = strlen(b);
-            if (n > 5 && strcmp(b + n - 5, ".json") == 0) n -= 5;
+            if (n > 5 && strcasecmp(b + n - 5, ".json") == 0) n -= 5;
             if (n > IMPORT_NAME_MAX) n = IMPORT_NAME_MAX;
             for (size_t k = 0; k < n; k++) {
                 char c = b[k];
@@ -880,7 +880,10 @@ static void import_kes(importer *im, const char *file)
     }
     if (kes_header(&h, colidx, file, &e) != 0) goto fail;
     while ((got = drape_cli_csv_next(text, len, &p, &r, file, &e)) == 1) {
-        if (r.n == 1 && !trim(r.field[0])[0]) { /* blank line */
+        /* a blank line, or a row of empty cells (spreadsheets save those) */
+        int blank = 1;
+        for (int k = 0; k < r.n && blank; k++) blank = !trim(r.field[k])[0];
+        if (blank) {
             drape_cli_csv_rec_free(&r);
             continue;
         }

@@ -254,6 +254,18 @@ START_TEST(test_arcsim_errors)
     ck_assert_msg(st == 3 && strstr(err, "not a regular file") && strstr(err, "no file written") &&
                   out[0] == 0, "exit %d, %s", st, err);
     ck_assert_int_eq(rmdir(sub), 0);
+    /* the extension goes in any case: X.JSON makes the fabric X */
+    {
+        char bytes[16384];
+        FILE *fp = fopen("data/denim-arcsim.json", "rb");
+        ck_assert_ptr_nonnull(fp);
+        size_t n = fread(bytes, 1, sizeof bytes, fp);
+        fclose(fp);
+        snprintf(args, sizeof args, "import arcsim %s --out-dir %s",
+                 tu_write_bytes("UPPER.JSON", bytes, n), dir);
+        st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st == 0 && strstr(out, "/UPPER.yaml"), "exit %d, %s %s", st, out, err);
+    }
     /* a file name that is not UTF-8 still makes a valid fabric file */
     {
         char bytes[16384];
@@ -353,6 +365,8 @@ START_TEST(test_kes_errors)
         {"", "t.csv: no rows after the header", 1},
         {"name,weight_g_m2,k_warp_N_m,k_weft_N_m,B_warp,B_weft,G_warp,G_weft,description\n"
          "ok,100,1,1,0.1,0.1,1,1,caf\xe9\n", "t.csv:2:24: description: not valid UTF-8", 0},
+        /* a row of empty cells is skipped as a blank line, the next is read */
+        {",,,,,,,\nok,100,1,1,0.1,x,1,1\n", "t.csv:3:16: B_weft: expected a number", 1},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         char text[1024];
