@@ -35,8 +35,9 @@ static const char batch_usage[] =
     "fabric_file, the keys of `drape run --format csv`, and error (the run's\n"
     "error message, empty on success).  status is equilibrium, t_max, failed\n"
     "or interrupted as reported by the run, or error when the run printed no\n"
-    "result (invalid fabric, crash).  results.csv is replaced atomically after every finished\n"
-    "fabric; each run's output and messages are kept in DIR/logs/.\n"
+    "result (invalid fabric, crash).  results.csv is replaced atomically after\n"
+    "every finished fabric; each run's output and messages are kept in\n"
+    "DIR/logs/.\n"
     "\n"
     "Options:\n"
     "  -j, --jobs N         run N fabrics at a time (default 1; 0 = one per CPU)\n"
@@ -527,7 +528,8 @@ static int usage_error(const char *fmt, const char *a)
 
 /* A quantity of dimension dim given to option opt: > 0 with positive,
  * >= 0 without (usage error otherwise). */
-static int check_quantity(const char *opt, const char *text, drape_dim dim, int positive)
+static int check_quantity(const char *opt, const char *text, drape_dim dim, int positive,
+                          double *out)
 {
     char why[256];
     double v;
@@ -543,6 +545,7 @@ static int check_quantity(const char *opt, const char *text, drape_dim dim, int 
         fprintf(stderr, "drape: batch: %s: must not be negative, got %s\n", opt, text);
         return -1;
     }
+    if (out) *out = v;
     return 0;
 }
 
@@ -640,22 +643,18 @@ int drape_cli_batch(int argc, char **argv)
         case O_RTOL: {
             double v;
             char why[256];
-            if (check_quantity("--rtol", optarg, DRAPE_DIM_NONE, 1)) return 2;
+            if (check_quantity("--rtol", optarg, DRAPE_DIM_NONE, 1, NULL)) return 2;
             if (drape_units_parse(optarg, DRAPE_DIM_NONE, &v, why, sizeof why) == 0 && !(v < 1))
                 return usage_error("--rtol: must be in (0, 1), got %s", optarg);
             name = "--rtol";
             break;
         }
         case O_ATOL:
-            if (check_quantity("--atol", optarg, DRAPE_DIM_LENGTH, 1)) return 2;
+            if (check_quantity("--atol", optarg, DRAPE_DIM_LENGTH, 1, NULL)) return 2;
             name = "--atol";
             break;
         case O_SPACING:
-            if (check_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, 1)) return 2;
-            {
-                char why[256];
-                drape_units_parse(optarg, DRAPE_DIM_LENGTH, &spacing, why, sizeof why);
-            }
+            if (check_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, 1, &spacing)) return 2;
             name = "--spacing";
             break;
         case O_FORM:
@@ -664,11 +663,11 @@ int drape_cli_batch(int argc, char **argv)
             name = "--energy-form";
             break;
         case O_TMAX:
-            if (check_quantity("--t-max", optarg, DRAPE_DIM_TIME, 1)) return 2;
+            if (check_quantity("--t-max", optarg, DRAPE_DIM_TIME, 1, NULL)) return 2;
             name = "--t-max";
             break;
         case O_STRAIN:
-            if (check_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, 1)) return 2;
+            if (check_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, 1, NULL)) return 2;
             name = "--strain-limit";
             break;
         case O_METHOD:
@@ -679,20 +678,20 @@ int drape_cli_batch(int argc, char **argv)
         case O_FALLTIME:
         case O_FALLSTEP:
             name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
-            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 1)) return 2;
+            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 1, NULL)) return 2;
             break;
         case O_FALLTOL:
             name = "--fall-tol";
-            if (check_quantity(name, optarg, DRAPE_DIM_LENGTH, 0)) return 2;
+            if (check_quantity(name, optarg, DRAPE_DIM_LENGTH, 0, NULL)) return 2;
             break;
         case O_FALLFOLD:
         case O_FALLRETRY:
             name = c == O_FALLFOLD ? "--fall-fold-time" : "--fall-retry";
-            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0)) return 2;
+            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0, NULL)) return 2;
             break;
         case O_DAMPSHEAR:
             name = "--damping-shear";
-            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0)) return 2;
+            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0, NULL)) return 2;
             break;
         case O_FALLSWING: {
             char *end;
@@ -721,8 +720,8 @@ int drape_cli_batch(int argc, char **argv)
                 (unsigned long long)v > DRAPE_SCENE_SEED_MAX)
                 return usage_error(c == O_SPECIMENS
                                        ? "--specimens: expected an integer from 1 to 1000, got `%s'"
-                                       : "--seed: expected a non-negative integer up to 2^53 - 1 "
-                                         "(9007199254740991), got `%s'",
+                                       : "--seed: expected a non-negative integer up to "
+                                         DRAPE_SCENE_SEED_MAX_TEXT ", got `%s'",
                                    optarg);
             break;
         }

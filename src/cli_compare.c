@@ -86,34 +86,12 @@ static int field(const char *path, json_object *o, const char *key, const char *
  * of one specimen written before ensembles, from dc and nodes). */
 static int load(const char *path, side *s, json_object **keep, drape_error *err)
 {
-    char *text = drape_cli_read_file(path, (size_t)64 << 20, NULL, err);
-    if (!text) return -1;
-    /* one JSON object and nothing after it but white space */
-    json_tokener *tok = json_tokener_new();
-    if (!tok) {
-        drape_free(text);
-        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
-    }
-    size_t len = strlen(text);
-    json_object *o = json_tokener_parse_ex(tok, text, (int)len);
-    size_t used = json_tokener_get_parse_end(tok);
-    enum json_tokener_error je = json_tokener_get_error(tok);
-    json_tokener_free(tok);
-    int line = 1, col = 1;
-    for (size_t i = 0; i < used && i < len; i++) {
-        if (text[i] == '\n') { line++; col = 1; }
-        else col++;
-    }
-    size_t rest = used;
-    while (rest < len && strchr(" \t\r\n", text[rest])) rest++;
-    drape_free(text);
-    if (!o || je != json_tokener_success || rest < len ||
-        !json_object_is_type(o, json_type_object)) {
-        if (o) json_object_put(o);
-        return drape_error_set(err, DRAPE_E_INPUT, path, line, col, NULL,
-                               "not one JSON object (the output of `drape run`)%s%s",
-                               je != json_tokener_success ? ": " : o ? ": text after it" : "",
-                               je != json_tokener_success ? json_tokener_error_desc(je) : "");
+    json_object *o = drape_cli_read_json(path, (size_t)64 << 20, err);
+    if (!o) return -1;
+    if (!json_object_is_type(o, json_type_object)) {
+        json_object_put(o);
+        return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, NULL,
+                               "not one JSON object (the output of `drape run`)");
     }
     *keep = o;
     json_object *sp;

@@ -299,15 +299,6 @@ typedef struct arcsim_mat {
     double bend[3][ARC_NK];
 } arcsim_mat;
 
-static void line_col(const char *text, size_t off, int *line, int *col)
-{
-    *line = 1, *col = 1;
-    for (size_t i = 0; i < off && text[i]; i++) {
-        if (text[i] == '\n') (*line)++, *col = 1;
-        else (*col)++;
-    }
-}
-
 static const char *json_type_word(json_object *v)
 {
     switch (json_object_get_type(v)) {
@@ -360,58 +351,12 @@ static int json_matrix(json_object *root, const char *key, int rows, int cols,
     return 0;
 }
 
-/* Skip blanks and comments (// and / * * /); return the offset of the next
- * other character. */
-static size_t skip_blank(const char *t, size_t i, size_t n)
-{
-    while (i < n) {
-        if (t[i] == ' ' || t[i] == '\t' || t[i] == '\n' || t[i] == '\r') i++;
-        else if (t[i] == '/' && i + 1 < n && t[i + 1] == '/') {
-            while (i < n && t[i] != '\n') i++;
-        } else if (t[i] == '/' && i + 1 < n && t[i + 1] == '*') {
-            const char *e = strstr(t + i + 2, "*/");
-            if (!e) return i;
-            i = (size_t)(e - t) + 2;
-        } else break;
-    }
-    return i;
-}
-
 static int arcsim_read(const char *path, arcsim_mat *m, drape_error *e)
 {
-    size_t len;
     int rc = -1;
-    json_tokener *tok = NULL;
-    json_object *root = NULL, *v;
-    char *text = drape_cli_read_file(path, IMPORT_MAX_INPUT, &len, e);
-    if (!text) return -1;
-    if (strlen(text) != len) {
-        drape_error_set(e, DRAPE_E_SYNTAX, path, 0, 0, NULL, "NUL byte: not a JSON text file");
-        goto out;
-    }
-    if (!(tok = json_tokener_new_ex(32))) {
-        drape_error_set(e, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
-        goto out;
-    }
-    root = json_tokener_parse_ex(tok, text, (int)len);
-    enum json_tokener_error je = json_tokener_get_error(tok);
-    size_t end = json_tokener_get_parse_end(tok);
-    if (!root || je != json_tokener_success) {
-        int line, col;
-        line_col(text, end, &line, &col);
-        drape_error_set(e, DRAPE_E_SYNTAX, path, line, col, NULL, "not valid JSON: %s",
-                        je == json_tokener_continue ? "unexpected end of file"
-                                                    : json_tokener_error_desc(je));
-        goto out;
-    }
-    size_t rest = skip_blank(text, end, len);
-    if (rest < len) {
-        int line, col;
-        line_col(text, rest, &line, &col);
-        drape_error_set(e, DRAPE_E_SYNTAX, path, line, col, NULL,
-                        "text after the end of the JSON object");
-        goto out;
-    }
+    json_object *v;
+    json_object *root = drape_cli_read_json(path, IMPORT_MAX_INPUT, e);
+    if (!root) return -1;
     if (!json_object_is_type(root, json_type_object)) {
         drape_error_set(e, DRAPE_E_INPUT, path, 0, 0, NULL,
                         "expected a JSON object with density, stretching and bending, got %s",
@@ -464,9 +409,7 @@ static int arcsim_read(const char *path, arcsim_mat *m, drape_error *e)
             }
     rc = 0;
 out:
-    if (root) json_object_put(root);
-    if (tok) json_tokener_free(tok);
-    drape_free(text);
+    json_object_put(root);
     return rc;
 }
 

@@ -24,6 +24,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <json-c/json.h>
+
 #include "drape/alloc.h"
 
 /* ---- whole files ----------------------------------------------------------- */
@@ -333,4 +335,74 @@ void drape_cli_warn(void *ctx, const drape_error *w)
     tmp.msg[0] = 0; /* location and key only; the text follows "warning:" */
     drape_error_format(&tmp, buf, sizeof buf);
     fprintf(stderr, "drape: %s%swarning: %s\n", error_context, buf, w->msg);
+}
+
+/* ---- JSON --------------------------------------------------------------- */
+
+static void line_col(const char *text, size_t off, int *line, int *col)
+{
+    *line = 1, *col = 1;
+    for (size_t i = 0; i < off && text[i]; i++) {
+        if (text[i] == '\n') (*line)++, *col = 1;
+        else (*col)++;
+    }
+}
+
+/* Skip blanks and comments (// and / * * /); return the offset of the next
+ * other character. */
+static size_t skip_blank(const char *t, size_t i, size_t n)
+{
+    while (i < n) {
+        if (t[i] == ' ' || t[i] == '\t' || t[i] == '\n' || t[i] == '\r') i++;
+        else if (t[i] == '/' && i + 1 < n && t[i + 1] == '/') {
+            while (i < n && t[i] != '\n') i++;
+        } else if (t[i] == '/' && i + 1 < n && t[i + 1] == '*') {
+            const char *e = strstr(t + i + 2, "*/");
+            if (!e) return i;
+            i = (size_t)(e - t) + 2;
+        } else break;
+    }
+    return i;
+}
+
+struct json_object *drape_cli_read_json(const char *path, size_t max, drape_error *err)
+{
+    size_t len;
+    json_object *root = NULL;
+    char *text = drape_cli_read_file(path, max, &len, err);
+    if (!text) return NULL;
+    if (strlen(text) != len) {
+        drape_error_set(err, DRAPE_E_SYNTAX, path, 0, 0, NULL, "NUL byte: not a JSON text file");
+        goto out;
+    }
+    json_tokener *tok = json_tokener_new_ex(32);
+    if (!tok) {
+        drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+        goto out;
+    }
+    root = json_tokener_parse_ex(tok, text, (int)len);
+    enum json_tokener_error je = json_tokener_get_error(tok);
+    size_t end = json_tokener_get_parse_end(tok);
+    json_tokener_free(tok);
+    int line, col;
+    if (!root || je != json_tokener_success) {
+        line_col(text, end, &line, &col);
+        drape_error_set(err, DRAPE_E_SYNTAX, path, line, col, NULL, "not valid JSON: %s",
+                        je == json_tokener_continue ? "unexpected end of file"
+                                                    : json_tokener_error_desc(je));
+        json_object_put(root);
+        root = NULL;
+        goto out;
+    }
+    size_t rest = skip_blank(text, end, len);
+    if (rest < len) {
+        line_col(text, rest, &line, &col);
+        drape_error_set(err, DRAPE_E_SYNTAX, path, line, col, NULL,
+                        "text after the end of the JSON object");
+        json_object_put(root);
+        root = NULL;
+    }
+out:
+    drape_free(text);
+    return root;
 }

@@ -28,6 +28,13 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
 char *drape_cli_read_file(const char *path, size_t max, size_t *len,
                           drape_error *err);
 
+/* Read a file of at most max bytes that holds one JSON value (blanks and
+ * // or / * * / comments around it, as ARCSim's files have): the value
+ * (caller frees with json_object_put), or NULL and err: E_SYNTAX at
+ * path:line:column for a NUL byte, malformed JSON or text after the value,
+ * E_IO or E_NOMEM. */
+struct json_object *drape_cli_read_json(const char *path, size_t max, drape_error *err);
+
 /* Replace a file atomically: open writes to PATH.tmp.PID next to it;
  * commit flushes, fsyncs and renames it over PATH; abort removes it.  A
  * reader sees either the old or the new file, never a partial one. */

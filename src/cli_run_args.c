@@ -41,11 +41,11 @@ static const char run_usage[] =
     "auto), method, the fall's (fall_time_s, fall_step_s, fall_end_s,\n"
     "fall_steps, fall_tol_m, fall_fold_time_s, fall_fold_step_s, fall_retry_s,\n"
     "fall_refused, fall_redone, fall_pumped, fall_redo_from_s), step_s and\n"
-    "substeps (animate),\n"
-    "the energy balance (energy_total_start_J, energy_total_end_J,\n"
-    "energy_max_rise_J, energy_gain_J, energy_rescales), max_strain_peak,\n"
-    "terms, damping_shear_s; null where the scene does not produce one;\n"
-    "docs/outputs.md).  status is equilibrium, t_max, failed or interrupted.\n"
+    "substeps (animate), the energy balance (energy_total_start_J,\n"
+    "energy_total_end_J, energy_max_rise_J, energy_gain_J, energy_rescales),\n"
+    "max_strain_peak, terms, damping_shear_s; null where the scene does not\n"
+    "produce one; docs/outputs.md).  status is equilibrium, t_max, failed or\n"
+    "interrupted.\n"
     "\n"
     "Repeated specimens (scene key `specimens: N`, or --specimens N): a drape\n"
     "test of N specimens that differ only in the perturbation seed (specimen k\n"
@@ -73,8 +73,8 @@ static const char run_usage[] =
     "                           large step, then the static solver (1-2 s per\n"
     "                           specimen on the Cusick test at 1 cm, about 15 s\n"
     "                           on the larger table scene; how its ensembles\n"
-    "                           compare with the dynamic ones:\n"
-    "                           docs/ensemble.md); dynamic (the\n"
+    "                           compare with the dynamic ones: docs/ensemble.md);\n"
+    "                           dynamic (the\n"
     "                           default otherwise): integrate the equations of\n"
     "                           motion in time; static: minimise the potential\n"
     "                           energy directly (pseudo-transient continuation,\n"
@@ -312,8 +312,8 @@ int drape_cli_run(int argc, char **argv)
             errno = 0;
             unsigned long v = strtoul(optarg, &end, 10);
             if (errno || *end || optarg[0] == '-' || optarg[0] == 0 || v > DRAPE_SCENE_SEED_MAX)
-                return usage_error("--seed: expected a non-negative integer up to 2^53 - 1 "
-                                   "(9007199254740991), got `%s'%s", optarg, "");
+                return usage_error("--seed: expected a non-negative integer up to "
+                                   DRAPE_SCENE_SEED_MAX_TEXT ", got `%s'%s", optarg, "");
             ra.has_seed = 1;
             ra.seed = v;
             break;

@@ -377,8 +377,8 @@ int drape_cli_specimens_run(const run_args *a)
 
     unsigned long seed0 = a->has_seed ? a->seed : s.perturb_seed;
     if (seed0 > DRAPE_SCENE_SEED_MAX - (unsigned long)(n - 1)) {
-        fprintf(stderr, "drape: run: the seeds of %d specimens from %lu go past 2^53 - 1 "
-                "(9007199254740991): give a smaller --seed\n", n, seed0);
+        fprintf(stderr, "drape: run: the seeds of %d specimens from %lu go past "
+                DRAPE_SCENE_SEED_MAX_TEXT ": give a smaller --seed\n", n, seed0);
         return drape_error_exit_status(DRAPE_E_USAGE);
     }
     if (a->has_seed) s.perturb_seed = a->seed;

@@ -31,9 +31,9 @@
  * fraction of the peak kinetic energy above its lowest value so far ends
  * the fall, and the specimen's fall goes on from the state of its lowest
  * total energy with its step chosen by its error (dyn_redo_tol, as when
- * the energy rises above its start: equilibrium.c).  The model dissipates: energy that the fall
- * keeps gaining is its linearly implicit step's, whose matrix drops the
- * compressed springs' negative stiffness.  Measured on the table scene
+ * the energy rises above its start: equilibrium.c).  The model
+ * dissipates: energy that the fall keeps gaining is its linearly implicit
+ * step's, whose matrix drops the compressed springs' negative stiffness.  Measured on the table scene
  * at 1 cm: seeds 11 and 12 gain 43 % and 67 % of the peak kinetic energy
  * from about 0.7 s on, step by step (seed 11: 1,134 of 2,559 steps
  * raise it), and swing on to the longest fall (4 fall times); halving the
@@ -142,7 +142,8 @@ static void fall_record(const eq_work *w, eq_fall_state *s, const double *x,
  * the state of the lowest total energy, from which the caller goes on) or
  * -1 (err set).  From a state *from (the caller's *low of an earlier
  * fall), the fall's time, record and peak kinetic energy go on from
- * there, its swing window empty. */
+ * there, and its swing window starts with that state's largest kinetic
+ * energy over the window. */
 int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max,
             const eq_fall_state *from, eq_fall_state *low, drape_error *err)
 {
@@ -421,7 +422,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
             }
         }
         /* at the shorter steps: a fall that keeps gaining energy is
-         * stopped, and the caller falls again (DRAPE_EQ_PUMP_RISE) */
+         * stopped, and the caller goes on from *low (DRAPE_EQ_PUMP_RISE) */
         if (h_redo == 0.0 && !adaptive && o->dyn_redo_tol > 0.0 && !long_step && ke_fell &&
             !(e_now <= e_low_all + DRAPE_EQ_PUMP_RISE * ke_max)) {
             r->dyn_pumped = 1;

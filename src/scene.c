@@ -341,8 +341,8 @@ static int parse_perturbation(const drape_yread *c, const drape_ynode *root, dra
             return drape_yread_error(c, v, "perturbation.seed",
                                      DRAPE_E_INPUT,
                                      "expected a non-negative integer%s, got "
-                                     "\"%s\"", big ? " up to 2^53 - 1 "
-                                     "(9007199254740991)" : "", t);
+                                     "\"%s\"", big ? " up to "
+                                     DRAPE_SCENE_SEED_MAX_TEXT : "", t);
         }
     }
     return 0;

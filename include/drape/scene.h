@@ -73,6 +73,7 @@ extern const char *const drape_method_names[];
  * ensemble's specimens: 2^53 - 1, the largest integer a JSON number (a
  * double) holds exactly. */
 #define DRAPE_SCENE_SEED_MAX 9007199254740991UL
+#define DRAPE_SCENE_SEED_MAX_TEXT "2^53 - 1 (9007199254740991)"
 
 typedef enum drape_table_shape { DRAPE_TABLE_SQUARE, DRAPE_TABLE_ROUND } drape_table_shape;
 
