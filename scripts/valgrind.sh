@@ -26,7 +26,12 @@ LOGS=$O/valgrind
 # drape executes itself again to set OMP_THREAD_LIMIT when it is not set
 # (src/main.c); under valgrind that second program would run natively
 export OMP_THREAD_LIMIT=1
-VG="valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible --errors-for-leak-kinds=definite,indirect,possible --track-origins=yes --error-exitcode=99 --suppressions=$ROOT/scripts/valgrind.supp"
+# memcheck with its options (a function: the checkout's path may hold spaces)
+vg_run() {
+    valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible \
+        --errors-for-leak-kinds=definite,indirect,possible --track-origins=yes \
+        --error-exitcode=99 --suppressions="$ROOT/scripts/valgrind.supp" "$@"
+}
 
 command -v valgrind >/dev/null 2>&1 || {
     echo "valgrind: installing valgrind"
@@ -45,7 +50,7 @@ vg() {
     shift 3
     t0=$(date +%s)
     st=0
-    (cd "$dir" && $VG --log-file="$LOGS/$name.log" "$@") > "$LOGS/$name.out" 2>&1 || st=$?
+    (cd "$dir" && vg_run --log-file="$LOGS/$name.log" "$@") > "$LOGS/$name.out" 2>&1 || st=$?
     ok=1
     if [ "$st" -eq 99 ] || grep -q 'ERROR SUMMARY: [1-9]' "$LOGS/$name.log"; then ok=0; fi
     case $want in

@@ -14,8 +14,12 @@
  *                reference's
  *   dc_in_ci95   1 when |dc_diff| <= REFERENCE's dc_ci95
  *   cpu_ratio    REFERENCE's CPU seconds per specimen / OTHER's
+ *   same_case    1 when both files give fabric, scene, energy_form,
+ *                terms and spacing_m and they agree; 0 when one of them
+ *                differs (a warning on stderr names each difference);
+ *                null when none differs but a file lacks one
  *
- * and the inputs' n, dc, dc_ci95, nodes_hist.  Issue 15 item 3 judges a
+ * and the inputs' n, dc, dc_ci95, nodes_hist and those five keys.  Issue 15 item 3 judges a
  * fast method against the accurate one by exactly these numbers
  * (docs/ensemble.md).  Exit status 0, or 1/3 for unreadable input.
  */
@@ -42,9 +46,13 @@ static const char compare_usage[] =
     "distributions, by permutation), dc_diff (OTHER - REFERENCE) with\n"
     "dc_diff_ci95 (the 95 % half-width of that difference, Welch),\n"
     "dc_in_ci95 (|dc_diff| within REFERENCE's 95 % half-width), cpu_ratio\n"
-    "(REFERENCE's CPU seconds per specimen over OTHER's) and both inputs' n,\n"
-    "dc, dc_sd, dc_ci95, nodes_hist, cpu_per_specimen_s.  A p value below\n"
-    "0.05 means the two differ at the 5 % level (docs/ensemble.md).\n"
+    "(REFERENCE's CPU seconds per specimen over OTHER's), same_case (1 when\n"
+    "both are of the same fabric, scene, energy_form, terms and spacing_m;\n"
+    "0 when one differs, with a warning on stderr for each difference; null\n"
+    "when a file does not say) and both inputs'\n"
+    "n, dc, dc_sd, dc_ci95, nodes_hist, cpu_per_specimen_s, fabric, scene,\n"
+    "energy_form, terms, spacing_m.  A p value below 0.05 means the two\n"
+    "differ at the 5 % level (docs/ensemble.md).\n"
     "\n"
     "Exit status: 0 success, 1 a file is not a drape result, 2 bad command\n"
     "line, 3 a file cannot be read.\n";
@@ -55,7 +63,13 @@ typedef struct side {
     int ndc;
     double cpu_per;
     json_object *hist;
+    /* what was draped: fabric, scene, energy_form, terms (NULL where
+     * missing or null) and spacing_m (NAN) */
+    const char *what[4];
+    double spacing_m;
 } side;
+
+static const char *const what_keys[4] = {"fabric", "scene", "energy_form", "terms"};
 
 
 /* The number at key (NAN where it is null or missing); -1 with err set
@@ -133,7 +147,19 @@ static int load(const char *path, side *s, json_object **keep, drape_error *err)
         }
     }
     double cpu;
-    if (field(path, o, "cpu_s", NULL, 0, &cpu, err) != 0) return -1;
+    if (field(path, o, "cpu_s", NULL, 0, &cpu, err) != 0 ||
+        field(path, o, "spacing_m", NULL, 0, &s->spacing_m, err) != 0)
+        return -1;
+    for (int k = 0; k < 4; k++) {
+        json_object *v;
+        s->what[k] = NULL;
+        if (!json_object_object_get_ex(o, what_keys[k], &v) || !v) continue;
+        if (!json_object_is_type(v, json_type_string))
+            return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, what_keys[k],
+                                   "expected a string or null, got %s",
+                                   json_object_to_json_string(v));
+        s->what[k] = json_object_get_string(v); /* lives as long as *keep */
+    }
     drape_ensemble_stats_compute(dcs, nodes, n, &s->st);
     s->ndc = 0;
     for (int k = 0; k < n; k++)
@@ -169,6 +195,10 @@ static json_object *side_json(const side *s)
     }
     json_object_object_add(o, "nodes_hist", h);
     json_object_object_add(o, "cpu_per_specimen_s", dnum(s->cpu_per));
+    for (int k = 0; k < 4; k++)
+        json_object_object_add(o, what_keys[k],
+                               s->what[k] ? json_object_new_string(s->what[k]) : NULL);
+    json_object_object_add(o, "spacing_m", dnum(s->spacing_m));
     return o;
 }
 
@@ -198,6 +228,25 @@ int drape_cli_compare(int argc, char **argv)
         status = drape_error_exit_status(err.kind);
         goto out;
     }
+    /* two drape tests of different things can be compared (two fabrics),
+     * but a fast method is judged against its reference on the same
+     * fabric, scene and lattice: say where they differ */
+    int same = 1, unknown = 0;
+    for (int k = 0; k < 4; k++)
+        if (!a.what[k] || !b.what[k])
+            unknown = 1;
+        else if (strcmp(a.what[k], b.what[k]) != 0) {
+            fprintf(stderr, "drape: compare: warning: %s differs: '%s' in %s, '%s' in %s\n",
+                    what_keys[k], a.what[k], argv[1], b.what[k], argv[2]);
+            same = 0;
+        }
+    if (!isfinite(a.spacing_m) || !isfinite(b.spacing_m))
+        unknown = 1;
+    else if (fabs(a.spacing_m - b.spacing_m) > 1e-9 * fmax(a.spacing_m, b.spacing_m)) {
+        fprintf(stderr, "drape: compare: warning: spacing_m differs: %g m in %s, %g m in %s\n",
+                a.spacing_m, argv[1], b.spacing_m, argv[2]);
+        same = 0;
+    }
     double diff = b.st.dc_mean - a.st.dc_mean;
     json_object *o = json_object_new_object();
     json_object_object_add(o, "p_nodes",
@@ -211,6 +260,8 @@ int drape_cli_compare(int argc, char **argv)
                            isfinite(a.st.dc_ci95) ? json_object_new_int(fabs(diff) <= a.st.dc_ci95)
                                                   : NULL);
     json_object_object_add(o, "cpu_ratio", dnum(a.cpu_per / b.cpu_per));
+    json_object_object_add(o, "same_case",
+                           same && unknown ? NULL : json_object_new_int(same));
     json_object_object_add(o, "reference", side_json(&a));
     json_object_object_add(o, "other", side_json(&b));
     printf("%s\n", json_object_to_json_string_ext(o, JSON_C_TO_STRING_SPACED |

@@ -39,6 +39,7 @@
 #include "cli_io.h"
 #include "drape/alloc.h"
 #include "drape/ensemble.h"
+#include "drape/fabric.h"
 
 double drape_cli_cpu_s(void)
 {
@@ -235,9 +236,17 @@ static void combine(drape_cli_result *out, const char *key, const drape_cli_fiel
     else drape_cli_result_num(out, key, acc);
 }
 
+/* What the parent knows of the run itself, for the keys that no specimen
+ * reported when none finished (interrupted or all failed). */
+typedef struct ens_ident {
+    const char *fabric, *scene;
+    double spacing_m;
+} ens_ident;
+
 static void build_result(drape_cli_result *r, child *ch, int n, const child *first,
                          const drape_ensemble_stats *st, int n_failed, int interrupted,
-                         double wall_s, unsigned long seed0, drape_cli_specimen *spec)
+                         double wall_s, unsigned long seed0, drape_cli_specimen *spec,
+                         const ens_ident *id)
 {
     memset(r, 0, sizeof *r);
     int all_eq = 1, n_ok = 0, all_min = 1, any_cert = 0;
@@ -292,6 +301,12 @@ static void build_result(drape_cli_result *r, child *ch, int n, const child *fir
             drape_cli_result_int(r, jkey, n_failed);
         } else if (strcmp(key, "seed") == 0) {
             drape_cli_result_int(r, jkey, (double)seed0);
+        } else if (!proto && strcmp(key, "fabric") == 0) {
+            drape_cli_result_str(r, jkey, id->fabric);
+        } else if (!proto && strcmp(key, "scene") == 0) {
+            drape_cli_result_str(r, jkey, id->scene);
+        } else if (!proto && strcmp(key, "spacing_m") == 0) {
+            drape_cli_result_num(r, jkey, id->spacing_m);
         } else if (!proto) {
             drape_cli_result_num(r, jkey, NAN);
         } else if (rule == R_SAME || proto->type == DRAPE_CLI_F_STR) {
@@ -373,6 +388,18 @@ int drape_cli_specimens_run(const run_args *a)
         ca.no_warnings = 1; /* the first specimen prints them */
         int cst = drape_cli_run_one(&ca, NULL);
         if (cst != 0) return cst;
+    }
+    /* the fabric's name for a result that no specimen finished (it loaded
+     * above, so an error here is out of memory at most) */
+    char fabric_name[DRAPE_FABRIC_NAME_MAX] = "";
+    {
+        drape_fabric *f = drape_malloc(sizeof *f);
+        drape_error ferr;
+        drape_error_clear(&ferr);
+        if (f && drape_fabric_load(a->fabric_path ? a->fabric_path : s.fabric_path, f, &ferr,
+                                   NULL, NULL) == 0)
+            memcpy(fabric_name, f->name, sizeof fabric_name);
+        drape_free(f);
     }
 
     unsigned long seed0 = a->has_seed ? a->seed : s.perturb_seed;
@@ -524,7 +551,9 @@ int drape_cli_specimens_run(const run_args *a)
         }
     }
     double wall = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-    build_result(r, ch, n, first, &st, n_failed, interrupted, wall, seed0, spec);
+    ens_ident id = {fabric_name[0] ? fabric_name : NULL, drape_scene_kind_name(s.kind),
+                    s.spacing};
+    build_result(r, ch, n, first, &st, n_failed, interrupted, wall, seed0, spec, &id);
     if (!drape_cli_result_check_keys(r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "ensemble result fields differ from drape_cli_run_keys");

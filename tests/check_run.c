@@ -479,6 +479,11 @@ START_TEST(test_interrupt_ensemble)
     ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
     ck_assert_msg(strstr(err, "not resumable"), "%s", err);
     ck_assert_int_eq((int)json_num(out, "specimens_failed"), 0);
+    /* what was run, from the parent when no specimen had finished (a 2 cm
+     * dynamic specimen takes several seconds): these were null */
+    ck_assert_msg(strstr(out, "\"fabric\": \"cotton-breen\"") &&
+                      strstr(out, "\"scene\": \"cusick\""), "%s", out);
+    ck_assert_msg(json_num(out, "spacing_m") == 0.02, "%s", out);
 }
 END_TEST
 

@@ -738,7 +738,40 @@ START_TEST(test_compare_distributions)
     ck_assert_double_eq_tol(p, drape_ensemble_ks_p(da, 24, db, 24), 1e-5);
     ck_assert_msg(p < 0.05 && jnum(o, "p_mean") > 0.05, "p_dc_dist %g, p_mean %g", p,
                   jnum(o, "p_mean"));
+    ck_assert_msg(json_object_object_get_ex(o, "same_case", NULL) &&
+                      jnum(o, "same_case") != jnum(o, "same_case"),
+                  "same_case of results that do not say what they drape: %s", out);
     json_object_put(o);
+
+    /* same_case: 1 for the same fabric, scene, energy form, terms and
+     * spacing; 0 and a warning naming the key where one differs */
+    static const char *const id_a =
+        "\"fabric\": \"cotton\", \"scene\": \"cusick\", \"energy_form\": \"consistent\", "
+        "\"terms\": \"stretch+bend\", \"spacing_m\": 0.01, ";
+    static const char *const id_b[][2] = {
+        {"\"fabric\": \"cotton\", \"scene\": \"cusick\", \"energy_form\": \"consistent\", "
+         "\"terms\": \"stretch+bend\", \"spacing_m\": 0.01, ", NULL},
+        {"\"fabric\": \"denim\", \"scene\": \"cusick\", \"energy_form\": \"consistent\", "
+         "\"terms\": \"stretch+bend\", \"spacing_m\": 0.01, ", "fabric differs"},
+        {"\"fabric\": \"cotton\", \"scene\": \"cusick\", \"energy_form\": \"consistent\", "
+         "\"terms\": \"stretch+bend\", \"spacing_m\": 0.02, ", "spacing_m differs"},
+        {"\"fabric\": \"cotton\", \"scene\": \"table\", \"energy_form\": \"seed\", "
+         "\"terms\": \"stretch+bend\", \"spacing_m\": 0.01, ", "energy_form differs"}};
+    char ia[600];
+    snprintf(ia, sizeof ia, "{%s\"dc\": 0.5, \"nodes\": 3, \"cpu_s\": 1}", id_a);
+    snprintf(pa, sizeof pa, "%s", tu_write_file("ida.json", ia));
+    for (size_t k = 0; k < sizeof id_b / sizeof id_b[0]; k++) {
+        char ib[600];
+        snprintf(ib, sizeof ib, "{%s\"dc\": 0.6, \"nodes\": 4, \"cpu_s\": 1}", id_b[k][0]);
+        snprintf(args, sizeof args, "compare %s %s", pa, tu_write_file("idb.json", ib));
+        ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+        o = json_tokener_parse(out);
+        ck_assert_ptr_nonnull(o);
+        ck_assert_msg(jnum(o, "same_case") == (id_b[k][1] ? 0.0 : 1.0), "%zu: %s", k, out);
+        ck_assert_msg(id_b[k][1] ? strstr(err, id_b[k][1]) != NULL : err[0] == 0, "%zu: %s", k,
+                      err);
+        json_object_put(o);
+    }
 
     /* what is not a drape result is refused (exit 1), naming the file and
      * the key or the place */
@@ -749,7 +782,9 @@ START_TEST(test_compare_distributions)
         {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": 2.7}]}", "specimens[0].nodes"},
         {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": -2}]}", "specimens[0].nodes"},
         {"{\"specimens\": {\"dc\": 0.4}, \"dc\": 0.4}", "specimens"},
-        {"{\"dc\": 0.4, \"cpu_s\": \"x\"}", "cpu_s"}};
+        {"{\"dc\": 0.4, \"cpu_s\": \"x\"}", "cpu_s"},
+        {"{\"dc\": 0.4, \"fabric\": 7}", "fabric"},
+        {"{\"dc\": 0.4, \"spacing_m\": \"1cm\"}", "spacing_m"}};
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         snprintf(args, sizeof args, "compare %s %s", tu_write_file("bad.json", bad[k][0]), pb);
         int st = tu_run_drape(args, out, CAP, err, CAP);
