@@ -311,6 +311,17 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err)
     return 0;
 }
 
+int drape_cli_check_target(const char *dir, const char *name, drape_error *err)
+{
+    char path[4200];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode))
+        return drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL,
+                               "--out: a directory is in the way of the output file");
+    return 0;
+}
+
 /* ---- messages (only the command line prints: STYLE.md 6) ---------------- */
 
 /* Set by an ensemble's child process: "specimen 3 (seed 4): " */

@@ -21,6 +21,9 @@ pid_t drape_cli_fork_pipe(int *fd);
  * non-directory is an E_IO error naming DIR and `--out`.  created may be
  * NULL; otherwise *created = 1 when this call made DIR. */
 int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
+/* DIR/NAME can be replaced by a file at the end of a run: it does not
+ * exist or is not a directory.  0, or -1 with an E_IO error. */
+int drape_cli_check_target(const char *dir, const char *name, drape_error *err);
 
 /* Read a whole file of at most max bytes into a NUL-terminated buffer
  * (*len = its length, may be NULL).  Caller frees with drape_free.  NULL

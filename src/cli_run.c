@@ -175,14 +175,18 @@ typedef struct saved_signals {
 } saved_signals;
 
 /* Catch SIGINT and SIGTERM (a signal ignored at start, as in a background
- * job, stays ignored).  SA_RESTART: reads and writes are not cut short. */
-static void catch_signals(saved_signals *sv)
+ * job, stays ignored).  SA_RESTART: reads and writes are not cut short.
+ * An ensemble's specimen (child) keeps the handler for a second signal:
+ * Ctrl-C or `timeout` signal the whole process group and the ensemble
+ * forwards the signal once more, so a specimen sees it twice; only the
+ * parent's second signal is the user's "stop now". */
+static void catch_signals(saved_signals *sv, int reset)
 {
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_stop_signal;
     sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESTART | SA_RESETHAND;
+    sa.sa_flags = SA_RESTART | (reset ? SA_RESETHAND : 0);
     stop_signal = 0;
     sigaction(SIGINT, NULL, &sv->old_int);
     sigaction(SIGTERM, NULL, &sv->old_term);
@@ -344,7 +348,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_sim_opts_default(&so);
 
     /* from here on SIGINT and SIGTERM are polled, not fatal */
-    catch_signals(&sigs);
+    catch_signals(&sigs, child == NULL);
 
     if (resume_dir) {
         ri = drape_calloc(1, sizeof *ri);
@@ -452,6 +456,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
 
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
+        if (!child && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
+            drape_cli_check_target(out_dir, "shadow.svg", &err) != 0)
+            goto fail;
         if (s.has_frames && s.out_obj) {
             rc.obj = drape_obj_new(out_dir, L, f.name, drape_scene_kind_name(s.kind), &err);
             if (!rc.obj) goto fail;
@@ -697,7 +704,6 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         goto fail;
     }
 
-    if (rc.obj) { drape_obj_free(rc.obj); rc.obj = NULL; } /* the frames stay */
     /* An interrupted dynamic run with --out always leaves DIR/drape.h5 (a
      * checkpoint without frames when the scene writes no HDF5). */
     if (interrupted && !method_static && out_dir && !rc.h5) {
@@ -750,6 +756,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                                  rad, na, sh.node_threshold_m};
         if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
     }
+    /* the frames stay; until here a failure (closing drape.h5, writing
+     * shadow.svg) removes them */
+    if (rc.obj) { drape_obj_free(rc.obj); rc.obj = NULL; }
     if (child) {
         drape_cli_result_write(child->out, &r);
         if (have_dc) {

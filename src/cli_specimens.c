@@ -429,6 +429,9 @@ int drape_cli_specimens_run(const run_args *a)
         goto fail;
     }
     if (a->out_dir && drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0) goto fail;
+    if (a->out_dir && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
+        drape_cli_check_target(a->out_dir, "shadow.svg", &err) != 0)
+        goto fail;
 
     struct sigaction sa, old_int, old_term;
     memset(&sa, 0, sizeof sa);

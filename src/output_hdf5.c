@@ -54,8 +54,18 @@ static herr_t walk_cb(unsigned n, const H5E_error2_t *e, void *data)
 {
     char *buf = data;
     if (n == 0 && e && e->desc) {
-        snprintf(buf, 256, "%s", e->desc);
-        buf[strcspn(buf, "\r\n")] = 0;
+        /* a system call's failure: "file write failed: time = <ctime(), which
+         * ends in a newline>, filename = ..., errno = 28, error message =
+         * 'No space left on device', ...": keep the what and the reason */
+        const char *m = strstr(e->desc, "error message = '");
+        if (m) {
+            m += strlen("error message = '");
+            int wl = (int)strcspn(e->desc, ":\r\n"), ml = (int)strcspn(m, "'");
+            snprintf(buf, 256, "%.*s: %.*s", wl, e->desc, ml, m);
+        } else {
+            snprintf(buf, 256, "%s", e->desc);
+            buf[strcspn(buf, "\r\n")] = 0;
+        }
     }
     return 0;
 }
@@ -269,7 +279,20 @@ drape_h5 *drape_h5_open(const char *dir, const drape_lattice *L, drape_error *er
     h->xmf = join(dir, XMF_BASE, NULL);
     h->xmf_tmp = join(dir, XMF_BASE, ".tmp");
     if (!h->dir || !h->path || !h->tmp || !h->xmf || !h->xmf_tmp) goto nomem;
-    h->file = H5Fcreate(h->tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    /* the files renamed into place at the end: refuse a directory in the
+     * way now, not after the run */
+    for (int k = 0; k < 2; k++) {
+        const char *p = k ? h->xmf : h->path;
+        if (lstat(p, &st) == 0 && S_ISDIR(st.st_mode)) {
+            drape_error_set(err, DRAPE_E_IO, p, 0, 0, NULL,
+                            "a directory is in the way of the output file");
+            goto fail;
+        }
+    }
+    /* never write through a stale temporary or a symlink (EXCL) */
+    unlink(h->tmp);
+    unlink(h->xmf_tmp);
+    h->file = H5Fcreate(h->tmp, H5F_ACC_EXCL, H5P_DEFAULT, H5P_DEFAULT);
     if (h->file < 0) {
         h5_fail(h->path, err, "cannot create the file");
         goto fail;
@@ -514,7 +537,9 @@ static void xmf_grid(const drape_h5 *h, FILE *f, const char *name, double t,
 
 static int write_xmf(drape_h5 *h, drape_error *err)
 {
-    FILE *f = fopen(h->xmf_tmp, "w");
+    int fd = open(h->xmf_tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW, 0666);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (!f && fd >= 0) close(fd);
     if (!f)
         return drape_error_set(err, DRAPE_E_IO, h->xmf, 0, 0, NULL, "cannot create %s: %s",
                                h->xmf_tmp, strerror(errno));

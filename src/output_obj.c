@@ -189,7 +189,9 @@ int drape_obj_write(drape_obj *o, const char *path, double t_s,
         goto out;
     }
     snprintf(tmp, len, "%s.%ld.tmp", path, (long)getpid());
-    fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+    /* never write through a stale temporary or a symlink */
+    unlink(tmp);
+    fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW, 0666);
     if (fd >= 0) written = 1;
     if (fd < 0 || !(f = fdopen(fd, "w"))) {
         drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot create %s: %s",

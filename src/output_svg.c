@@ -41,6 +41,10 @@ static void text_escaped(FILE *f, const char *s)
         else if (*s == '>') fputs("&gt;", f);
         else if (*s == '&') fputs("&amp;", f);
         else if (*s == '"') fputs("&quot;", f);
+        /* C0 controls but tab, LF, CR are not XML 1.0 characters, not
+         * even as references */
+        else if ((unsigned char)*s < 0x20 && *s != '\t' && *s != '\n' && *s != '\r')
+            fputc(' ', f);
         else fputc(*s, f);
     }
 }
@@ -55,7 +59,12 @@ int drape_svg_shadow_write(FILE *f, const drape_svg_scene *sc,
         for (int j = 0; sp[k].r && j < sp[k].n; j++)
             if (1e3 * sp[k].r[j] > half) half = 1e3 * sp[k].r[j];
     half += SVG_MARGIN_MM;
-    double w = 2.0 * half + SVG_LEGEND_MM, h = 2.0 * half;
+    /* the legend column fits its bold 4 mm title (about 2.6 mm a character) */
+    double legend = SVG_LEGEND_MM;
+    size_t tl = 0;
+    for (const char *c = sc->title; c && *c; c++) tl += ((unsigned char)*c & 0xC0) != 0x80;
+    if (8.0 + 2.6 * (double)tl > legend) legend = 8.0 + 2.6 * (double)tl;
+    double w = 2.0 * half + legend, h = 2.0 * half;
     if (h < 80.0) h = 80.0;
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" "

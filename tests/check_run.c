@@ -180,6 +180,23 @@ START_TEST(test_output_dir_errors)
     ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 3);
     ck_assert_str_eq(out, "");
     ck_assert_ptr_nonnull(strstr(err, "not-a-dir"));
+
+    /* a directory where drape.h5 or drape.xmf is to be renamed at the end:
+     * refused before the run (it was found at the end, the computation
+     * lost and the frames left behind) */
+    static const char *const block[] = {"drape.h5", "drape.xmf"};
+    for (int k = 0; k < 2; k++) {
+        char dir[600], cmd[1400];
+        snprintf(dir, sizeof dir, "%s/blocked-%d", tu_scratch_dir(), k);
+        snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s/%s'", dir, dir, block[k]);
+        ck_assert_int_eq(system(cmd), 0);
+        snprintf(args, sizeof args, "%s --out '%s'", small_hang, dir);
+        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 3);
+        ck_assert_str_eq(out, "");
+        ck_assert_msg(strstr(err, block[k]) && strstr(err, "in the way"), "%s", err);
+        snprintf(cmd, sizeof cmd, "test \"$(ls '%s')\" = %s", dir, block[k]);
+        ck_assert_msg(system(cmd) == 0, "%s holds more than %s", dir, block[k]);
+    }
 }
 END_TEST
 
@@ -487,6 +504,86 @@ START_TEST(test_interrupt_ensemble)
 }
 END_TEST
 
+/* Ctrl-C or `timeout` signal the whole process group: each specimen gets
+ * the signal from the terminal and again from the ensemble, which passes
+ * it on.  The second one killed a specimen outright (its handler was reset
+ * after the first), leaving DIR/specimen-00k/drape.h5.PID.tmp and counting
+ * it failed: now every specimen stops at its next poll. */
+START_TEST(test_interrupt_ensemble_group)
+{
+    char dir[600], cmd[1400];
+    snprintf(dir, sizeof dir, "%s/ens-group", tu_scratch_dir());
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    ck_assert_int_eq(system(cmd), 0);
+    char o_path[600], e_path[600];
+    snprintf(o_path, sizeof o_path, "%s/group.stdout", tu_scratch_dir());
+    snprintf(e_path, sizeof e_path, "%s/group.stderr", tu_scratch_dir());
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        setpgid(0, 0);
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen(o_path, "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
+        execl(drape_bin(), "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "2cm",
+              "--method", "dynamic", "--specimens", "2", "-j", "2", "--out", dir,
+              (char *)NULL);
+        _exit(98);
+    }
+    setpgid(pid, pid); /* either side may run first */
+    struct timespec ts = {1, 200 * 1000 * 1000};
+    nanosleep(&ts, NULL);
+    ck_assert_msg(waitpid(pid, NULL, WNOHANG) == 0, "drape ended within 1.2 s");
+    kill(-pid, SIGTERM);
+    int ws;
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    FILE *f = fopen(o_path, "r");
+    size_t n = f ? fread(out, 1, CAP - 1, f) : 0;
+    out[n] = 0;
+    if (f) fclose(f);
+    ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 143, "status %d", ws);
+    ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
+    ck_assert_msg(json_num(out, "specimens_failed") == 0, "%s", out);
+    snprintf(cmd, sizeof cmd, "test -z \"$(find '%s' -name '*.tmp')\"", dir);
+    ck_assert_msg(system(cmd) == 0, "temporary files left in %s", dir);
+}
+END_TEST
+
+/* A symbolic link at the name of a frame's or drape.h5's temporary file
+ * (NAME.PID.tmp: predictable) is not written through: the file it points
+ * to stays as it was, and the outputs are regular files. */
+START_TEST(test_out_no_symlink)
+{
+    char dir[600], victim[600], cmd[4200];
+    snprintf(dir, sizeof dir, "%s/symlinked", tu_scratch_dir());
+    snprintf(victim, sizeof victim, "%s/victim.txt", tu_scratch_dir());
+    snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s' && echo keep > '%s'", dir, dir,
+             victim);
+    ck_assert_int_eq(system(cmd), 0);
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) { /* the links at this process's names, then drape in it */
+        char l[800];
+        static const char *const names[] = {"frame_000000.obj", "drape.h5", "drape.xmf"};
+        for (int k = 0; k < 3; k++) {
+            snprintf(l, sizeof l, "%s/%s.%ld.tmp", dir, names[k], (long)getpid());
+            if (symlink(victim, l) != 0) _exit(97);
+        }
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(drape_bin(), "drape", "run", "-q", "../scenes/hang.yaml", "--spacing", "5cm",
+              "--t-max", "0.05s", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    int ws;
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "status %d", ws);
+    snprintf(cmd, sizeof cmd, "test \"$(cat '%s')\" = keep && test -f '%s/drape.h5' && "
+             "test ! -L '%s/drape.h5' && test ! -L '%s/frame_000000.obj' && "
+             "test -z \"$(find '%s' -name '*.tmp')\"", victim, dir, dir, dir, dir);
+    ck_assert_msg(system(cmd) == 0, "%s", cmd);
+}
+END_TEST
+
 START_TEST(test_interrupt_and_resume)
 {
     const char *scene = ir_scene();
@@ -779,6 +876,8 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_interrupt_within_interval);
     tcase_add_test(tc, test_interrupt_static);
     tcase_add_test(tc, test_interrupt_ensemble);
+    tcase_add_test(tc, test_interrupt_ensemble_group);
+    tcase_add_test(tc, test_out_no_symlink);
     tcase_add_test(tc, test_imex_limp_fold);
     tcase_add_test(tc, test_interrupt_and_resume);
     tcase_add_test(tc, test_resume_refusals);

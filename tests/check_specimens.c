@@ -259,13 +259,23 @@ START_TEST(test_ensemble_input_errors)
     ck_assert_int_eq(system(cmd), 0);
 
     /* one specimen: its picture is written before its result is printed,
-     * in CSV too; a picture it cannot write leaves no result on stdout */
+     * in CSV too; a picture it cannot write leaves no result on stdout.
+     * A directory in the picture's way is found before the run, not after
+     * it (an ensemble ran every specimen first) */
     snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir -p %s/shadow.svg", dir, dir);
     ck_assert_int_eq(system(cmd), 0);
     snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
              "--specimens 1 --out %s", dir);
     st = tu_run_drape(args, out, CAP, err, CAP);
-    ck_assert_msg(st == 3 && out[0] == 0 && strstr(err, "shadow.svg"), "exit %d, %s", st, err);
+    ck_assert_msg(st == 3 && out[0] == 0 && strstr(err, "shadow.svg") &&
+                      strstr(err, "in the way"), "exit %d, %s", st, err);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 2 -j 1 --out %s", dir);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3 && out[0] == 0 && strstr(err, "shadow.svg") &&
+                      strstr(err, "in the way"), "exit %d, %s", st, err);
+    snprintf(cmd, sizeof cmd, "test \"$(ls %s)\" = shadow.svg", dir);
+    ck_assert_msg(system(cmd) == 0, "a specimen ran: %s", dir);
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
     ck_assert_int_eq(system(cmd), 0);
     snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
@@ -289,7 +299,9 @@ START_TEST(test_ensemble_input_errors)
 END_TEST
 
 /* A fabric's name travels from each specimen's process to the ensemble
- * whole, whatever it holds: a tab, a newline, a backslash. */
+ * whole, whatever it holds: a tab, a newline, a backslash, a control
+ * character; its picture's legend stays XML (a C0 control other than tab,
+ * LF, CR is not an XML character: the SVG was not well-formed). */
 START_TEST(test_ensemble_texts)
 {
     FILE *fp = fopen("../fabrics/cotton-breen.yaml", "r");
@@ -298,25 +310,30 @@ START_TEST(test_ensemble_texts)
     size_t len = 0;
     char line[1024];
     while (fgets(line, sizeof line, fp)) {
-        const char *l = strncmp(line, "fabric:", 7) == 0 ? "fabric: \"tab\\tnew\\nline\\\\end\"\n"
+        const char *l = strncmp(line, "fabric:", 7) == 0 ? "fabric: \"tab\\tnew\\nline\\\\end\\x01<&\"\n"
                                                          : line;
         ck_assert_uint_lt(len + strlen(l), sizeof text);
         memcpy(text + len, l, strlen(l) + 1);
         len += strlen(l);
     }
     fclose(fp);
-    char args[4096];
+    char args[4096], dir[900], svg[1000];
+    snprintf(dir, sizeof dir, "%s/ens-name-out", tu_scratch_dir());
     snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --fabric %s --spacing 3cm "
-             "--method static --specimens 2 -j 1", tu_write_file("ens-name.yaml", text));
+             "--method static --specimens 2 -j 1 --out %s", tu_write_file("ens-name.yaml", text),
+             dir);
     int st = tu_run_drape(args, out, CAP, err, CAP);
     ck_assert_msg(st == 0, "exit %d, %s", st, err);
     json_object *o = json_tokener_parse(out);
     ck_assert_msg(o != NULL, "%s", out);
     json_object *f;
     ck_assert(json_object_object_get_ex(o, "fabric", &f));
-    ck_assert_str_eq(json_object_get_string(f), "tab\tnew\nline\\end");
+    ck_assert_str_eq(json_object_get_string(f), "tab\tnew\nline\\end\001<&");
     ck_assert_int_eq((int)jnum(o, "specimens_failed"), 0);
     json_object_put(o);
+    snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
+    ck_assert_int_eq(xpath_count(svg, "//s:polygon[@class='shadow']"), 2);
+    ck_assert_int_eq(xpath_count(svg, "//s:text[contains(., 'end <&, cusick')]"), 1);
 }
 END_TEST
 
