@@ -31,6 +31,9 @@
  */
 #include "drape/fabric.h"
 
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_poly.h>
+
 #include <ctype.h>
 #include <math.h>
 #include <stdio.h>
@@ -67,6 +70,57 @@ typedef struct fit_units {
     double sx, sy;
     char xname[64], yname[64]; /* as written, for messages */
 } fit_units;
+
+/* Where the fit is not positive for x > 0, or 0 where it is positive
+ * throughout (*piece is then untouched).  Each piece is tested between its
+ * real roots inside its interval (GSL's companion-matrix solver) at the
+ * midpoints, and past its last root, for the last piece, by the sign of
+ * its leading coefficient: exact up to rounding, where a grid of points
+ * can step over a dip.  -1 if GSL runs out of memory. */
+static int fit_nonpositive(const drape_fit *fit, double *where, int *piece)
+{
+    for (int k = 0; k < fit->n; k++) {
+        const drape_fit_piece *p = &fit->p[k];
+        double a = k == 0 ? 0.0 : p->from, b = p->to;
+        int deg = p->ncoef - 1;
+        while (deg > 0 && p->c[deg] == 0.0) deg--;
+        double pts[DRAPE_FIT_MAX_COEFS + 2];
+        int np = 0;
+        pts[np++] = a;
+        if (deg >= 1) {
+            double z[2 * (DRAPE_FIT_MAX_COEFS - 1)];
+            /* GSL's default handler aborts: off here, as the caller had it */
+            gsl_error_handler_t *old = gsl_set_error_handler_off();
+            gsl_poly_complex_workspace *ws = gsl_poly_complex_workspace_alloc((size_t)deg + 1);
+            int rc = ws ? gsl_poly_complex_solve(p->c, (size_t)deg + 1, ws, z) : GSL_ENOMEM;
+            if (ws) gsl_poly_complex_workspace_free(ws);
+            gsl_set_error_handler(old);
+            if (rc == GSL_ENOMEM) return -1;
+            for (int i = 0; rc == GSL_SUCCESS && i < deg; i++) {
+                double re = z[2 * i], im = z[2 * i + 1];
+                if (fabs(im) > 1e-9 * fmax(1.0, fabs(re)) || !(re > a && re < b)) continue;
+                int j = np++; /* insertion, sorted */
+                while (j > 1 && pts[j - 1] > re) { pts[j] = pts[j - 1]; j--; }
+                pts[j] = re;
+            }
+        }
+        if (isfinite(b)) pts[np++] = b;
+        for (int i = 0; i + 1 < np; i++) {
+            double x = 0.5 * (pts[i] + pts[i + 1]);
+            if (!(drape_fit_piece_value(p, x) > 0.0)) {
+                *where = x;
+                *piece = k;
+                return 1;
+            }
+        }
+        if (!isfinite(b) && !(p->c[deg] > 0.0)) { /* beyond its last root */
+            *where = INFINITY;
+            *piece = k;
+            return 1;
+        }
+    }
+    return 0;
+}
 
 /* Read one list of pieces (`bending.warp`) into *fit in the file's units,
  * check it (MODEL.md 3.4), and convert it to SI. */
@@ -226,6 +280,37 @@ static int get_fit(const drape_yread *r, const drape_ynode *list,
                              "slope at a knot); the fit is not C1 there",
                              yquantity, x, u->xname, sl, sr,
                              100 * fabs(sr - sl) / sscale);
+    }
+    /* a moment or force that opposes the bending or shear: a rigidity
+     * (slope at 0) above 0 and a value above 0 for every x > 0 (the KES
+     * path asks B > 0 and G > 0 likewise); a fit that turns negative,
+     * even past its data, drives the cloth the wrong way where it folds */
+    double s0 = drape_fit_piece_slope(&fit->p[0], 0.0);
+    if (!(s0 > 0.0)) {
+        snprintf(pp, sizeof pp, "%s[0].poly", path);
+        return drape_yread_error(r, drape_ynode_get(list->items[0], "poly", NULL), pp,
+                                 DRAPE_E_INPUT,
+                                 "the %s must rise from 0: its slope at 0 (the rigidity) "
+                                 "is %g %s per %s, expected > 0", yquantity, s0, u->yname,
+                                 u->xname);
+    }
+    double bad;
+    int bk = 0, nz = fit_nonpositive(fit, &bad, &bk);
+    if (nz < 0)
+        return drape_yread_error(r, list, path, DRAPE_E_NOMEM, "out of memory");
+    if (nz > 0) {
+        drape_yread_item_path(pp, sizeof pp, path, (size_t)bk);
+        if (isinf(bad))
+            return drape_yread_error(r, list->items[bk], pp, DRAPE_E_INPUT,
+                                     "the %s turns negative for large %s (the last piece's "
+                                     "leading coefficient is not positive): it must oppose "
+                                     "the deformation for every %s > 0", yquantity,
+                                     u->xname, u->xname);
+        return drape_yread_error(r, list->items[bk], pp, DRAPE_E_INPUT,
+                                 "the %s is not positive at %.6g %s (%.6g %s): it must "
+                                 "oppose the deformation for every %s > 0", yquantity, bad,
+                                 u->xname, drape_fit_piece_value(&fit->p[bk], bad), u->yname,
+                                 u->xname);
     }
     drape_fit_scale(fit, u->sx, u->sy);
     drape_fit_prepare(fit);
@@ -465,10 +550,20 @@ static void kes_shear(double G, double hg2, double hg52, drape_fit *fit)
 }
 
 /* The G unit must say "per angle": a bare "gf/cm" would silently be read
- * per radian, 57 times the KES value per degree. */
+ * per radian, 57 times the KES value per degree.  Angles are dimensionless
+ * to the unit parser, so "gf/cm.deg" (= gf deg / cm) or "gf/cm/deg^2" would
+ * pass its dimension check with a scale off by (180/pi)^2 or 180/pi: the
+ * unit must end in "/deg" or "/rad", its only angle. */
 static int has_angle_unit(const char *s)
 {
-    return strstr(s, "deg") || strstr(s, "rad");
+    size_t n = strlen(s);
+    while (n > 0 && (s[n - 1] == ' ' || s[n - 1] == '\t')) n--;
+    int angles = 0;
+    for (const char *p = s; (p = strstr(p, "deg")) != NULL; p += 3) angles++;
+    for (const char *p = s; (p = strstr(p, "rad")) != NULL; p += 3) angles++;
+    return angles == 1 && n >= 4 &&
+           (strncmp(s + n - 4, "/deg", 4) == 0 ||
+            strncmp(s + n - 4, "/rad", 4) == 0);
 }
 
 static int has_letter(const char *s)
@@ -519,9 +614,10 @@ static int get_kes(const drape_yread *r, const drape_ynode *kn,
         if (!has_angle_unit(g->scalar) && has_letter(g->scalar))
             return drape_yread_error(r, g, kp, DRAPE_E_INPUT,
                                      "G is a force per length per angle: "
-                                     "write the angle unit, e.g. \"0.9 "
-                                     "gf/cm/deg\" (KES) or \"... N/m/rad\", "
-                                     "got \"%s\"", g->scalar);
+                                     "write the angle unit, last and once, "
+                                     "e.g. \"0.9 gf/cm/deg\" (KES) or "
+                                     "\"... N/m/rad\", got \"%s\"",
+                                     g->scalar);
         if (drape_yread_opt_quantity(r, dn, pp, "2HG", fpl, "shear hysteresis",
                                      nonneg, &hg2, NULL) ||
             drape_yread_opt_quantity(r, dn, pp, "2HG5", fpl,

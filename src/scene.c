@@ -158,8 +158,13 @@ static int parse_direction(const drape_yread *c, const drape_ynode *v, drape_sce
     } else if (strcmp(v->scalar, "warp") == 0 || strcmp(v->scalar, "weft") == 0) {
         deg = strcmp(v->scalar, "warp") == 0 ? 0.0 : 90.0;
     } else {
-        deg = strtod(v->scalar, &end);
-        if (end == v->scalar || *end) { /* a quantity with an angle unit */
+        /* a plain decimal is degrees (no hex, inf or nan: strtod takes
+         * "0x2D" as 45) */
+        int plain = v->scalar[0] != 0;
+        for (const char *p = v->scalar; *p && plain; p++)
+            if (!strchr("0123456789.eE+-", *p)) plain = 0;
+        deg = plain ? strtod(v->scalar, &end) : 0.0;
+        if (!plain || end == v->scalar || *end) { /* a quantity with an angle unit */
             double rad;
             char why[160];
             if (drape_units_parse(v->scalar, DRAPE_DIM_NONE, &rad, why, sizeof why) != 0)

@@ -283,6 +283,14 @@ static int b_scalar(builder *b, const yaml_event_t *ev)
             return b_error(b, DRAPE_E_SYNTAX, line, col, path,
                            "empty mapping key");
         }
+        /* the duplicate search below is linear per key: bound the keys of
+         * one mapping so a large file cannot make the load quadratic (no
+         * drape mapping has more than a few dozen keys) */
+        if (m->n >= DRAPE_YDOC_MAX_KEYS) {
+            b_path(b, NULL, path, sizeof path);
+            return b_error(b, DRAPE_E_SYNTAX, line, col, path,
+                           "more than %d keys in one mapping", DRAPE_YDOC_MAX_KEYS);
+        }
         for (size_t i = 0; i < m->n; i++) {
             if (strcmp(m->keys[i], v) == 0) {
                 b_path(b, v, path, sizeof path);

@@ -513,6 +513,22 @@ static const bad_case bad[] = {
     /* "    - {from: 0, poly: [" is 23 bytes: poly[0] at 24, poly[1] at 27 */
     {HEAD BEND "    - {from: 0, poly: [0.01, 1]}\n" WEFT SHEAR, DRAPE_E_INPUT,
      7, 24, "bending.warp[0].poly[0]", "at 0 must be 0, got 0.01 N.m/m"},
+    /* a moment that does not oppose the bending: no rigidity, a negative
+     * one, a fit negative past its data (root 0.2 1/m), one negative
+     * between its knots (x - x^2 on [1, 2)), one that dips below 0 between
+     * its real roots 2 -+ sqrt(0.2) and rises again */
+    {HEAD BEND "    - {from: 0, poly: [0, -0.2]}\n" WEFT SHEAR, DRAPE_E_INPUT, 7, 23,
+     "bending.warp[0].poly", "must rise from 0: its slope at 0 (the rigidity) is -0.2"},
+    {HEAD BEND "    - {from: 0, poly: [0, 0, 1]}\n" WEFT SHEAR, DRAPE_E_INPUT, 7, 23,
+     "bending.warp[0].poly", "its slope at 0 (the rigidity) is 0 N.m/m per 1/m"},
+    {HEAD BEND "    - {from: 0, poly: [0, 0.2, -1]}\n" WEFT SHEAR, DRAPE_E_INPUT, 7, 7,
+     "bending.warp[0]", "turns negative for large 1/m"},
+    {HEAD BEND "    - {from: 0, to: 2, poly: [0, 1, -1]}\n"
+              "    - {from: 2, poly: [-6, 2]}\n" WEFT SHEAR,
+     DRAPE_E_INPUT, 7, 7, "bending.warp[0]", "is not positive at 1.5 1/m (-0.75 N.m/m)"},
+    {HEAD BEND "    - {from: 0, to: 1, poly: [0, 1]}\n"
+              "    - {from: 1, poly: [4.75, -5, 1.25]}\n" WEFT SHEAR,
+     DRAPE_E_INPUT, 8, 7, "bending.warp[1]", "is not positive at 2 1/m (-0.25 N.m/m)"},
     {HEAD BEND "    - {from: 0, poly: [0, x]}\n" WEFT SHEAR, DRAPE_E_INPUT, 7,
      27, "bending.warp[0].poly[1]", "expected a number, got \"x\""},
     {HEAD BEND "    - {from: 0, poly: [0, 1 N]}\n" WEFT SHEAR, DRAPE_E_INPUT,
@@ -568,6 +584,14 @@ static const bad_case bad[] = {
      "(\"3\")"},
     {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm}\n", DRAPE_E_INPUT,
      5, 30, "kes.warp.G", "write the angle unit"},
+    /* angles are dimensionless to the unit parser: an angle multiplied in,
+     * or twice, passed with a scale off by (180/pi)^2 or 180/pi */
+    {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm.deg}\n", DRAPE_E_INPUT,
+     5, 30, "kes.warp.G", "write the angle unit, last and once"},
+    {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm/deg^2}\n", DRAPE_E_INPUT,
+     5, 30, "kes.warp.G", "write the angle unit, last and once"},
+    {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf.rad/cm/deg}\n", DRAPE_E_INPUT,
+     5, 30, "kes.warp.G", "write the angle unit, last and once"},
     {KES_HEAD "kes:\n  warp: {B: 1 gf.cm/cm, G: 1 gf/cm/deg}\n", DRAPE_E_INPUT,
      5, 13, "kes.warp.B", "expected a moment (N.m), got gf.cm/cm"},
     {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm/deg, 2HB: -1 "

@@ -743,6 +743,11 @@ START_TEST(test_bad_names)
                  "specimen: {length: 20 cm, width: 2 cm, direction: diagonal}\n"
                  "overhang: 6 cm\nspacing: 5 mm\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 3, 51, "specimen.direction", "warp, weft, bias or an angle");
+    /* a plain number is degrees; strtod's hex ("0x2D" = 45) is not */
+    expect_error("scene: cantilever\nfabric: @F\n"
+                 "specimen: {length: 20 cm, width: 2 cm, direction: 0x2D}\n"
+                 "overhang: 6 cm\nspacing: 5 mm\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 3, 51, "specimen.direction", NULL);
     /* shape must suit the scene */
     expect_error("scene: cusick\nfabric: @F\n"
                  "specimen: {shape: rectangle, width: 30 cm, height: 30 cm}\n"

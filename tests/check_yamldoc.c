@@ -293,6 +293,13 @@ START_TEST(test_duplicate_keys)
               "first given at line 2");
     FAIL_TEXT("s:\n  - {p: 1, p: 2}\n", DRAPE_E_INPUT, 2, 12, "s[0].p",
               "duplicate key `p`");
+    /* the duplicate search is linear per key: a mapping holds at most 1024
+     * keys, so that a file of 160,000 keys (2 MB) is refused at once, not
+     * after minutes of a quadratic search */
+    static char many[1100 * 12];
+    size_t n = 0;
+    for (int k = 0; k < 1100; k++) n += (size_t)sprintf(many + n, "k%d: %d\n", k, k);
+    expect_fail(many, n, DRAPE_E_SYNTAX, 1025, 1, NULL, "more than 1024 keys in one mapping");
     /* same key in different mappings is fine */
     drape_error err;
     drape_error_clear(&err);

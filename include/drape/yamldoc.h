@@ -4,7 +4,8 @@
  * drape's input files are plain YAML 1.1 mappings, sequences and scalars.
  * The loader rejects what drape's files never need and what makes errors
  * unclear: anchors and aliases, tags, more than one document, nesting deeper
- * than DRAPE_YDOC_MAX_DEPTH, duplicate keys in a mapping, non-scalar keys,
+ * than DRAPE_YDOC_MAX_DEPTH, duplicate keys in a mapping, more than
+ * DRAPE_YDOC_MAX_KEYS keys in one mapping, non-scalar keys,
  * files that are empty or contain NUL bytes or invalid UTF-8.
  */
 #ifndef DRAPE_YAMLDOC_H
@@ -15,6 +16,9 @@
 #include "drape/error.h"
 
 #define DRAPE_YDOC_MAX_DEPTH 32
+/* keys of one mapping: the duplicate search is linear per key, and no
+ * drape mapping has more than a few dozen */
+#define DRAPE_YDOC_MAX_KEYS 1024
 #define DRAPE_YDOC_MAX_BYTES (16L * 1024 * 1024) /* refuse larger files */
 
 typedef enum drape_ynode_type {
