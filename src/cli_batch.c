@@ -24,6 +24,7 @@
 #include "drape/alloc.h"
 #include "drape/fabric.h"
 #include "drape/integrator.h"
+#include "drape/output.h"
 #include "drape/scene.h"
 #include "drape/units.h"
 
@@ -265,6 +266,16 @@ out:
     return rc;
 }
 
+/* fabric_file as row_set stored it (line breaks as spaces) */
+static int same_file_field(const char *fabric, const char *field)
+{
+    for (; *fabric && *field; fabric++, field++) {
+        char c = *fabric == '\n' || *fabric == '\r' ? ' ' : *fabric;
+        if (c != *field) return 0;
+    }
+    return *fabric == *field;
+}
+
 /* --resume: read DIR/results.csv; keep done rows of given fabrics and every
  * row of fabrics not given now. */
 static int load_previous(batch *b, drape_error *err)
@@ -314,13 +325,18 @@ static int load_previous(batch *b, drape_error *err)
         drape_cli_csv_rec_free(&r);
         job *jb = NULL;
         for (int k = 0; k < b->n && !jb; k++)
-            if (strcmp(b->jobs[k].fabric, row[COL_FILE]) == 0) jb = &b->jobs[k];
+            if (same_file_field(b->jobs[k].fabric, row[COL_FILE])) jb = &b->jobs[k];
         if (jb) {
             if (b->frames && strcmp(row_status(row), "interrupted") == 0) jb->cont = 1;
-            if (!jb->row && status_done(row_status(row))) {
+            if (!jb->row || (jb->state != JOB_DONE && status_done(row_status(row)))) {
+                /* a done row: kept; another (error, interrupted): kept in
+                 * results.csv until the fabric's new run replaces it */
+                row_free(jb->row);
                 jb->row = row;
-                jb->state = JOB_DONE;
-                jb->resumed = 1;
+                if (status_done(row_status(row))) {
+                    jb->state = JOB_DONE;
+                    jb->resumed = 1;
+                }
                 row = NULL;
             }
         } else {
@@ -354,10 +370,30 @@ static void log_path(const batch *b, const job *jb, const char *ext, char *out, 
     snprintf(out, n, "%s/logs/%s.%s", b->dir, jb->name, ext);
 }
 
+/* 1 if the checkpoint at path is a run of fabric (NAME depends on the
+ * command line's order: another fabric may have had this NAME before). */
+static int checkpoint_is_for(const char *path, const char *fabric)
+{
+    char buf[4096];
+    struct stat want, have;
+    drape_error e;
+    drape_error_clear(&e);
+    if (drape_cli_data_find(fabric, buf, sizeof buf, &e) != 0 || stat(buf, &want) != 0) return 0;
+    drape_h5_checkpoint c;
+    memset(&c, 0, sizeof c);
+    if (drape_h5_checkpoint_read(path, &c, &e) != 0) return 0;
+    const drape_kv *kv = drape_kv_find(c.run, c.n_run, "fabric_path");
+    int same = kv && kv->text && stat(kv->text, &have) == 0 && have.st_dev == want.st_dev &&
+               have.st_ino == want.st_ino;
+    drape_h5_checkpoint_free(&c);
+    return same;
+}
+
 static int launch(batch *b, job *jb, drape_error *err)
 {
     char out_path[BATCH_PATH_MAX], err_path[BATCH_PATH_MAX], frames[BATCH_PATH_MAX];
-    const char *av[40];
+    /* 7 fixed + --fabric F + every passed option + --out DIR + -- SCENE + NULL */
+    const char *av[7 + 2 + sizeof b->pass / sizeof b->pass[0] + 2 + 2 + 1];
     int k = 0;
     log_path(b, jb, "csv", out_path, sizeof out_path);
     log_path(b, jb, "stderr", err_path, sizeof err_path);
@@ -371,7 +407,7 @@ static int launch(batch *b, job *jb, drape_error *err)
     av[k++] = "1";
     char ck[BATCH_PATH_MAX + 16];
     snprintf(ck, sizeof ck, "%s/drape.h5", frames);
-    if (jb->cont && access(ck, F_OK) == 0) {
+    if (jb->cont && access(ck, F_OK) == 0 && checkpoint_is_for(ck, jb->fabric)) {
         /* the options are stored in the checkpoint (batch.args made sure
          * they are this batch's) */
         av[k++] = "--resume";
@@ -864,6 +900,10 @@ int drape_cli_batch(int argc, char **argv)
     handlers = 1;
     /* one BLAS thread per run: the batch itself is the parallelism */
     setenv("OPENBLAS_NUM_THREADS", "1", 0);
+    /* the runs may get a SIGTERM twice: from whoever signalled the whole
+     * process tree (systemd, Slurm) and from kill_running; the second must
+     * not kill them (cli_run.c, catch_signals) */
+    setenv("DRAPE_SIGNAL_FORWARDED", "1", 1);
 
     int next = 0, warned = 0, killed = 0;
     for (;;) {
@@ -874,6 +914,7 @@ int drape_cli_batch(int argc, char **argv)
             drape_error_clear(&e2);
             if (launch(&b, jb, &e2) != 0) { /* fork failed: an error row */
                 char m[1024];
+                row_free(jb->row);
                 if (!(jb->row = row_new())) goto nomem;
                 if (row_set(jb->row, COL_FILE, jb->fabric) ||
                     row_set(jb->row, col_of("status"), "error") ||

@@ -176,10 +176,12 @@ typedef struct saved_signals {
 
 /* Catch SIGINT and SIGTERM (a signal ignored at start, as in a background
  * job, stays ignored).  SA_RESTART: reads and writes are not cut short.
- * An ensemble's specimen (child) keeps the handler for a second signal:
- * Ctrl-C or `timeout` signal the whole process group and the ensemble
- * forwards the signal once more, so a specimen sees it twice; only the
- * parent's second signal is the user's "stop now". */
+ * An ensemble's specimen (child), or a run of `drape batch` (which sets
+ * DRAPE_SIGNAL_FORWARDED in its runs' environment), keeps the handler for
+ * a second signal: Ctrl-C, `timeout`, systemd or Slurm signal the whole
+ * process group or tree and the parent forwards the signal once more, so
+ * such a run sees it twice; only a top-level run takes a second signal as
+ * the user's "stop now". */
 static void catch_signals(saved_signals *sv, int reset)
 {
     struct sigaction sa;
@@ -348,7 +350,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_sim_opts_default(&so);
 
     /* from here on SIGINT and SIGTERM are polled, not fatal */
-    catch_signals(&sigs, child == NULL);
+    catch_signals(&sigs, child == NULL && !getenv("DRAPE_SIGNAL_FORWARDED"));
 
     if (resume_dir) {
         ri = drape_calloc(1, sizeof *ri);
@@ -473,6 +475,19 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.progress = !quiet && isatty(STDERR_FILENO);
     rc.t_max = s.t_max;
     rc.frame = ri ? ri->frames : 0;
+    if (ri) { /* the energy balance covers the whole run, as the counters do */
+        const drape_kv *e0 = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "energy_total_start_J");
+        const drape_kv *e1 = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "energy_total_end_J");
+        const drape_kv *emr = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "energy_max_rise_J");
+        const drape_kv *sp = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "max_strain_peak");
+        if (e0 && !e0->text && isfinite(e0->value) && e1 && !e1->text && isfinite(e1->value)) {
+            rc.n_energy = 1;
+            rc.e_start = e0->value;
+            rc.e_prev = rc.e_end = e1->value;
+            rc.e_max_rise = emr && !emr->text && isfinite(emr->value) ? emr->value : -INFINITY;
+            rc.strain_peak = sp && !sp->text && isfinite(sp->value) ? sp->value : 0.0;
+        }
+    }
 
     if (method_static) {
         sim_ok = run_static(m, &f, &fp, &rc, s.strain_limit, &res, &er, &err);
@@ -616,8 +631,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     one.nodes = have_dc ? sh.nodes : -1;
     one.r_min_m = have_dc ? sh.r_min_m : NAN;
     one.r_max_m = have_dc ? sh.r_max_m : NAN;
-    one.cpu_s = drape_cli_cpu_s() - cpu0;
-    drape_cli_result_num(&r, "cpu_s", drape_cli_cpu_s());
+    /* a resumed run's CPU time counts the time before it, as wall_s does */
+    double cpu_prev = 0.0;
+    if (ri) {
+        const drape_kv *c = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "cpu_s");
+        if (c && !c->text && c->value >= 0) cpu_prev = c->value;
+    }
+    one.cpu_s = drape_cli_cpu_s() - cpu0 + cpu_prev;
+    drape_cli_result_num(&r, "cpu_s", drape_cli_cpu_s() + cpu_prev);
     drape_cli_result_num(&r, "dc_sd", NAN);
     drape_cli_result_num(&r, "dc_ci95", NAN);
     drape_cli_result_num(&r, "dc_mode", one.dc);

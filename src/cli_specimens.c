@@ -109,9 +109,16 @@ typedef struct child {
 
 static volatile sig_atomic_t ens_stop;
 
+/* signals received: a second one stops the specimens at once (SIGKILL),
+ * unless drape batch runs this ensemble (DRAPE_SIGNAL_FORWARDED: the
+ * ensemble then gets each signal twice, from whoever signalled the
+ * process tree and from the batch) */
+static volatile sig_atomic_t ens_signals;
+
 static void on_signal(int sig)
 {
     ens_stop = sig;
+    ens_signals++;
 }
 
 static int launch(const run_args *a, child *c, unsigned long seed, const char *out_dir)
@@ -438,6 +445,8 @@ int drape_cli_specimens_run(const run_args *a)
     sa.sa_handler = on_signal;
     sigemptyset(&sa.sa_mask);
     ens_stop = 0;
+    ens_signals = 0;
+    const int hard_at = getenv("DRAPE_SIGNAL_FORWARDED") ? 3 : 2;
     sigaction(SIGINT, NULL, &old_int);
     sigaction(SIGTERM, NULL, &old_term);
     if (old_int.sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
@@ -445,7 +454,7 @@ int drape_cli_specimens_run(const run_args *a)
 
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
-    int forwarded = 0;
+    int forwarded = 0, hard = 0;
     while (n_done < n_started || (n_started < n && !ens_stop)) {
         while (!ens_stop && n_started < n && n_running < jobs) {
             child *c = &ch[n_started];
@@ -468,6 +477,11 @@ int drape_cli_specimens_run(const run_args *a)
             for (int k = 0; k < n_started; k++)
                 if (!ch[k].done) kill(ch[k].pid, (int)ens_stop);
             forwarded = 1;
+        }
+        if (ens_signals >= hard_at && !hard) { /* the user's "stop now" */
+            for (int k = 0; k < n_started; k++)
+                if (!ch[k].done) kill(ch[k].pid, SIGKILL);
+            hard = 1;
         }
         /* a child's CPU time: what RUSAGE_CHILDREN gains when it is
          * waited for (wait4 is not POSIX) */
@@ -516,7 +530,9 @@ int drape_cli_specimens_run(const run_args *a)
         child *c = &ch[k];
         drape_cli_specimen *p = &spec[k];
         p->seed = seed0 + (unsigned long)k;
-        const char *stx = k >= n_started ? "interrupted" : spec_status(c);
+        /* not started, or stopped by the signal before it reported */
+        const char *stx = k >= n_started || (ens_stop > 0 && !c->have_res && c->exit_status >= 128)
+                              ? "interrupted" : spec_status(c);
         snprintf(p->status, sizeof p->status, "%.15s", stx);
         int ok = k < n_started && spec_ok(c);
         if (k < n_started && c->have_res && strcmp(p->status, "interrupted") == 0) interrupted = 1;
@@ -537,6 +553,11 @@ int drape_cli_specimens_run(const run_args *a)
         sv[k] = (drape_svg_specimen){p->seed, p->dc, p->nodes, c->cx, c->cy,
                                      ok ? c->radii : NULL, ok ? c->n_radii : 0, c->thr};
     }
+    /* the inputs (integrator, lattice, options) from any specimen that
+     * reported, also when none succeeded (failed, interrupted) */
+    const child *proto = first;
+    for (int k = 0; !proto && k < n_started; k++)
+        if (ch[k].have_res) proto = &ch[k];
     drape_ensemble_stats st;
     drape_ensemble_stats_compute(dcs, nodes, n, &st);
     /* every specimen failed in the same way that is not numerical (an
@@ -556,7 +577,7 @@ int drape_cli_specimens_run(const run_args *a)
     double wall = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     ens_ident id = {fabric_name[0] ? fabric_name : NULL, drape_scene_kind_name(s.kind),
                     s.spacing};
-    build_result(r, ch, n, first, &st, n_failed, interrupted, wall, seed0, spec, &id);
+    build_result(r, ch, n, proto, &st, n_failed, interrupted, wall, seed0, spec, &id);
     if (!drape_cli_result_check_keys(r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "ensemble result fields differ from drape_cli_run_keys");

@@ -283,6 +283,34 @@ START_TEST(test_method_passed_on)
 }
 END_TEST
 
+/* Every option that batch passes on, all at once (21 of them, with
+ * --frames): the runs' argument array overflowed from 14 (a stack buffer
+ * of 40 entries; AddressSanitizer saw it in `make asan`), and each value
+ * reaches the run. */
+START_TEST(test_many_options_passed_on)
+{
+    const char *d = subdir("many");
+    char args[4096];
+    snprintf(args, sizeof args,
+             "batch -q ../scenes/cantilever.yaml %s --out %s --frames --integrator cvode-bdf "
+             "--rtol 1e-4 --atol 1e-7 --spacing 1cm --energy-form consistent --t-max 1s "
+             "--max-steps 100000 --strain-limit 0.3 --method fall --linear-solver auto "
+             "--max-order 2 --specimens 1 --seed 3 --fall-time 0.5s --fall-step 2ms "
+             "--fall-swing 0.02 --fall-tol 0 --fall-fold-time 0.1s --fall-retry 0 "
+             "--terms stretch,bend,shear,gravity --damping-shear 0", COTTON, d);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(d, t);
+    ck_assert_int_eq(t->nrow, 1);
+    ck_assert_str_eq(cell(t, 0, "method"), "fall");
+    ck_assert_str_eq(cell(t, 0, "seed"), "3");
+    ck_assert_double_eq_tol(atof(cell(t, 0, "spacing_m")), 0.01, 1e-12);
+    ck_assert_double_eq_tol(atof(cell(t, 0, "fall_step_s")), 0.002, 1e-12);
+    free(t);
+}
+END_TEST
+
 /* --max-order reaches the runs: the result row says BDF1 (the scene's
  * integrator is cvode-bdf); a bad value is a usage error. */
 START_TEST(test_max_order_passed_on)
@@ -583,6 +611,59 @@ END_TEST
  * its row says interrupted (exit status 143); --resume with --frames
  * continues that run from its checkpoint (`drape run --resume`) and the
  * row then matches a direct, uninterrupted run (up to the tolerance). */
+/* Two fabrics with one file name in two directories get the frame
+ * directories a and a-2 in command-line order; a --resume that lists them
+ * the other way round continued each from the other's checkpoint (rows
+ * swapped, exit 0).  Each run now goes on only from its own fabric's. */
+START_TEST(test_resume_swapped_names)
+{
+    const char *dir = subdir("swapped");
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    char d1[1024], d2[1024], cmd[8192], f1[1100], f2[1100], w1[1200], w2[1200];
+    snprintf(d1, sizeof d1, "%s/d1", tu_scratch_dir());
+    snprintf(d2, sizeof d2, "%s/d2", tu_scratch_dir());
+    snprintf(f1, sizeof f1, "%s/a.yaml", d1);
+    snprintf(f2, sizeof f2, "%s/a.yaml", d2);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s %s && cp %s %s && cp %s %s", d1, d2, COTTON, f1,
+             DENIM, f2);
+    ck_assert_int_eq(system(cmd), 0);
+    snprintf(w1, sizeof w1, "%s/frames/a/frame_000001.obj", dir);
+    snprintf(w2, sizeof w2, "%s/frames/a-2/frame_000001.obj", dir);
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(bin, "drape", "batch", "-q", SCENE, f1, f2, "--spacing", "5cm", "--t-max", "0.3s",
+              "-j", "2", "--frames", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    struct timespec ts = {0, 1000 * 1000};
+    for (int i = 0; i < 20000 && (access(w1, F_OK) != 0 || access(w2, F_OK) != 0); i++)
+        nanosleep(&ts, NULL);
+    ck_assert_msg(access(w1, F_OK) == 0 && access(w2, F_OK) == 0, "the runs did not start");
+    kill(pid, SIGTERM);
+    int ws;
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 143, "status %d", ws);
+    clear_logs(dir);
+    snprintf(cmd, sizeof cmd, "batch -q %s %s %s --spacing 5cm --t-max 0.3s -j 2 --frames "
+             "--out %s --resume", SCENE, f2, f1, dir);
+    ck_assert_msg(tu_run_drape(cmd, out, CAP, err, CAP) == 0, "%s", err);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    for (int r = 0; r < 2; r++) {
+        const char *file = cell(t, r, "fabric_file"), *name = cell(t, r, "fabric");
+        ck_assert_str_eq(cell(t, r, "status"), "t_max");
+        ck_assert_msg(strcmp(name, strstr(file, "/d1/") ? "cotton-breen" : "denim-wang") == 0,
+                      "%s: row of %s", file, name);
+    }
+    free(t);
+}
+END_TEST
+
 START_TEST(test_interrupted_row_resumed)
 {
     const char *dir = subdir("interrupted");
@@ -668,6 +749,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_parallel_same_rows);
     tcase_add_test(tc, test_method_passed_on);
     tcase_add_test(tc, test_max_order_passed_on);
+    tcase_add_test(tc, test_many_options_passed_on);
     tcase_add_test(tc, test_terms_passed_on);
     tcase_add_test(tc, test_resume);
     tcase_add_test(tc, test_failed_run);
@@ -675,6 +757,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_sigint_keeps_finished_rows);
     tcase_add_test(tc, test_bad_corpus);
     tcase_add_test(tc, test_interrupted_row_resumed);
+    tcase_add_test(tc, test_resume_swapped_names);
     suite_add_tcase(s, tc);
     return s;
 }
