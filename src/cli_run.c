@@ -403,6 +403,18 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->terms) s.terms = ra->terms;
     if (ri && ri->terms >= 1.0 && ri->terms <= (double)DRAPE_TERM_ALL) /* what ran */
         s.terms = (unsigned)ri->terms;
+    /* an oblique strip is a staircase of the lattice: without shear its
+     * cells turn freely (docs/scenes.md); allowed, as docs/validation.md
+     * runs it on purpose, but said */
+    if (s.shape == DRAPE_SHAPE_STRIP && s.strip_angle > 0.0 && s.strip_angle < 90.0 &&
+        !(s.terms & DRAPE_TERM_SHEAR) && !ra->no_warnings && !resume_dir) {
+        drape_error w;
+        drape_error_clear(&w);
+        drape_error_set(&w, DRAPE_E_INPUT, scene_path, 0, 0, "specimen.direction",
+                        "a strip at %g deg to the warp without the shear term: its staircase "
+                        "of lattice cells shears freely (docs/scenes.md)", s.strip_angle);
+        drape_cli_warn(NULL, &w);
+    }
     if (ri && ri->fixed_step > 0.0) { /* animate's step (its --substeps) */
         double frame;
         drape_scene_animate_step(&s, &frame, NULL);
@@ -778,7 +790,15 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
     }
     /* the frames stay; until here a failure (closing drape.h5, writing
-     * shadow.svg) removes them */
+     * shadow.svg) removes them.  Those of an earlier, longer run in the
+     * same directory go, once this run is complete (an interrupted one
+     * may be resumed over them: its own frames are all below rc.frame) */
+    if (rc.obj && sim_ok && !interrupted && drape_obj_written(rc.obj) > 0) {
+        int gone = drape_obj_remove_stale(rc.obj, rc.frame);
+        if (gone > 0 && !ra->no_warnings)
+            fprintf(stderr, "drape: %s: removed %d frame%s of an earlier run (from "
+                    "frame_%06d.obj)\n", out_dir, gone, gone == 1 ? "" : "s", rc.frame);
+    }
     if (rc.obj) { drape_obj_free(rc.obj); rc.obj = NULL; }
     if (child) {
         drape_cli_result_write(child->out, &r);

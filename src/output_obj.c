@@ -148,6 +148,22 @@ void drape_obj_discard(drape_obj *o)
     drape_obj_free(o);
 }
 
+int drape_obj_remove_stale(drape_obj *o, int first)
+{
+    if (!o) return 0;
+    size_t len = strlen(o->dir) + 32;
+    char *path = drape_malloc(len);
+    if (!path) return 0;
+    int n = 0;
+    for (int k = first; k >= 0 && k < 1000000; k++) {
+        snprintf(path, len, "%s/frame_%06d.obj", o->dir, k);
+        if (unlink(path) != 0) break; /* the frames are numbered 0, 1, ... */
+        n++;
+    }
+    drape_free(path);
+    return n;
+}
+
 int drape_obj_written(const drape_obj *o)
 {
     return o ? o->n_written : 0;

@@ -19,6 +19,7 @@
 #include "drape/scene.h"
 
 #include <errno.h>
+#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -467,6 +468,13 @@ static int parse_tol(const drape_yread *c, const drape_ynode *m, const char *key
     double t = 0.0;
     if (!v) return 0;
     drape_yread_path(path, sizeof path, "solver", key);
+    /* no unit: the parser takes angles as dimensionless ("5 deg" was
+     * 0.087), and atol's units are those of the state (m and m/s) */
+    for (const char *q = v->type == DRAPE_YNODE_SCALAR ? v->scalar : ""; *q; q++)
+        if (isalpha((unsigned char)*q) && *q != 'e' && *q != 'E')
+            return drape_yread_error(c, v, path, DRAPE_E_INPUT,
+                                     "a tolerance is a plain number without a unit (atol "
+                                     "is in m and m/s), got \"%s\"", v->scalar);
     if (drape_yread_quantity(c, v, path, DRAPE_DIM_NONE, "number in (0, 1)", DRAPE_YREAD_ANY, &t))
         return -1;
     if (!(t > 0.0 && t < 1.0))

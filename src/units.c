@@ -260,7 +260,7 @@ static int parse_unit_n(const char *u, size_t len, double *scale,
             us = symbol_lookup(u + start, i - start);
         }
         if (!us) {
-            say(why, nwhy, "unknown unit \"%.*s\" (known: m cm mm um km, s ms "
+            say(why, nwhy, "unknown unit \"%.*s\" (known: m cm mm um km, s ms us "
                 "min h, kg g mg, N mN gf kgf, rad deg, 1)",
                 (int)(i - start), u + start);
             return -1;

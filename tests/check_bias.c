@@ -635,6 +635,31 @@ START_TEST(test_scene_direction)
 }
 END_TEST
 
+/* An oblique strip without the shear term runs (docs/validation.md does
+ * so on purpose) but is said to shear freely; with shear, or along the
+ * warp, nothing is said. */
+START_TEST(test_oblique_without_shear_warns)
+{
+    static char o[1 << 16], e[1 << 16];
+    static const struct {
+        const char *args;
+        int warns;
+    } cases[] = {
+        {"--terms stretch,bend,gravity", 1},
+        {"--terms stretch,bend,shear,gravity", 0},
+    };
+    for (size_t k = 0; k < 2; k++) {
+        char a[512];
+        snprintf(a, sizeof a, "run -q ../scenes/cantilever-bias.yaml --method static --spacing "
+                 "1cm %s", cases[k].args);
+        ck_assert_msg(tu_run_drape(a, o, sizeof o, e, sizeof e) == 0, "%s", e);
+        ck_assert_msg((strstr(e, "specimen.direction: warning: a strip at 45 deg to the warp "
+                                 "without the shear term") != NULL) == cases[k].warns,
+                      "%s: %s", cases[k].args, e);
+    }
+}
+END_TEST
+
 /* An oblique strip's lattice: masses sum to W x area, every particle lies
  * in the rotated rectangle, the platform holds the particles at x <= 0,
  * and the element areas are those of the strip (hinges of each family
@@ -823,6 +848,7 @@ Suite *bias_suite(void)
     tcase_add_test(tc, test_bias_uniform_twist);
     tcase_add_test(tc, test_twisted_plate);
     tcase_add_test(tc, test_scene_direction);
+    tcase_add_test(tc, test_oblique_without_shear_warns);
     tcase_add_test(tc, test_oblique_lattice);
     tcase_add_test(tc, test_cantilever_angles);
     suite_add_tcase(s, tc);

@@ -392,6 +392,27 @@ static void h5_status(const char *path, char *buf, size_t n)
  * only the step sizes: the runs differ by less than their own global
  * errors, see below; a resume from a wrong time or without the
  * velocities is off by centimetres). */
+/* A shorter run into the directory of a longer one: the longer run's
+ * later frames are removed once the new run is complete (a renderer
+ * loading frame_*.obj mixed the two runs), and drape says so. */
+START_TEST(test_stale_frames_removed)
+{
+    char dir[600], args[1400];
+    snprintf(dir, sizeof dir, "%s/stale", tu_scratch_dir());
+    snprintf(args, sizeof args, "run -q ../scenes/hang.yaml --spacing 5cm --t-max 0.2s --out '%s'",
+             dir);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    int before = count_prefix(dir, "frame_", ".obj");
+    ck_assert_int_eq(before, 7); /* 0 .. 0.2 s every 1/30 s */
+    snprintf(args, sizeof args, "run -q ../scenes/hang.yaml --spacing 5cm --t-max 0.05s --out '%s'",
+             dir);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    ck_assert_int_eq(count_prefix(dir, "frame_", ".obj"), 3); /* 0, 1/30 s, 0.05 s */
+    ck_assert_msg(strstr(err, "removed 4 frames of an earlier run (from frame_000003.obj)"), "%s",
+                  err);
+}
+END_TEST
+
 /* A signal stops the run within the output interval, not at its end: one
  * interval of 50 s of cloth motion (hours of stepping); SIGTERM once the
  * t = 0 frame exists must end the run with status interrupted at t = 0,
@@ -870,6 +891,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_interrupt_static);
     tcase_add_test(tc, test_interrupt_ensemble);
     tcase_add_test(tc, test_interrupt_ensemble_group);
+    tcase_add_test(tc, test_stale_frames_removed);
     tcase_add_test(tc, test_out_no_symlink);
     tcase_add_test(tc, test_imex_limp_fold);
     tcase_add_test(tc, test_interrupt_and_resume);

@@ -613,7 +613,11 @@ START_TEST(test_bad_units)
                  "expected a speed");
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "solver: {rtol: 1e-4 m}\nend: {t_max: 5 s}\n",
-                 DRAPE_E_INPUT, 4, 16, "solver.rtol", "dimensionless");
+                 DRAPE_E_INPUT, 4, 16, "solver.rtol", "plain number without a unit");
+    /* an angle is dimensionless to the unit parser: it passed as 0.087 */
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "solver: {rtol: 5 deg}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 16, "solver.rtol", "plain number without a unit");
     /* not a number */
     expect_error("scene: cusick\nfabric: @F\nspacing: two cm\n"
                  "end: {t_max: 5 s}\n",

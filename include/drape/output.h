@@ -56,6 +56,12 @@ void drape_obj_discard(drape_obj *o);
 /* Number of distinct files written so far. */
 int drape_obj_written(const drape_obj *o);
 
+/* After a complete run whose last frame was first - 1: remove the frames
+ * first, first + 1, ... that an earlier, longer run left in the directory
+ * (a renderer loading frame_*.obj would mix the two runs), up to the
+ * first number that does not exist.  Returns how many were removed. */
+int drape_obj_remove_stale(drape_obj *o, int first);
+
 /* Write positions x (3n, m) at time t_s as DIR/frame_%06d.obj (frame >= 0).
  * Returns 0 or -1 with err set. */
 int drape_obj_frame(drape_obj *o, int frame, double t_s, const double *x,
