@@ -27,6 +27,7 @@
 #include "drape/output.h"
 #include "drape/scene.h"
 #include "drape/units.h"
+#include "drape/yamldoc.h"
 
 static const char batch_usage[] =
     "Usage: drape batch SCENE.yaml FABRIC.yaml... [OPTIONS]\n"
@@ -47,7 +48,9 @@ static const char batch_usage[] =
     "                       equilibrium, t_max or failed and run only the other\n"
     "                       fabrics (rows with status error or interrupted are\n"
     "                       run again; with --frames an interrupted run continues\n"
-    "                       from its checkpoint, `drape run --resume`)\n"
+    "                       from its checkpoint, `drape run --resume`); a fabric\n"
+    "                       file changed since its row was made is run again, a\n"
+    "                       changed scene file is refused (exit 2)\n"
     "  --frames             also write each run's frames to DIR/frames/NAME/\n"
     "  -q, --quiet          no progress line on stderr\n"
     "  -h, --help           show this help\n"
@@ -103,6 +106,7 @@ typedef struct job {
     int resumed;                 /* row taken from an earlier results.csv */
     int cont;                    /* continue its interrupted run (--resume --frames) */
     char **row;                  /* N_COLS fields, or NULL */
+    unsigned long long sum;      /* of the fabric file's text (0: unreadable) */
 } job;
 
 typedef struct batch {
@@ -115,6 +119,11 @@ typedef struct batch {
     int n;
     char ***extra;               /* earlier rows of fabrics not given now */
     int n_extra;
+    /* DIR/inputs.sum as read by --resume: the fabric files' sums when
+     * their rows were made (fabric_file as in results.csv) */
+    char **old_file;
+    unsigned long long *old_sum;
+    int n_old;
     int n_done, n_bad, n_running;
     char results[BATCH_PATH_MAX];
 } batch;
@@ -208,6 +217,81 @@ static int mkdir_p(const char *dir, drape_error *err)
     return 0;
 }
 
+/* FNV-1a (64 bits) of a file's bytes: whether an input changed since a
+ * row was made, not a digest against tampering.  0 if it cannot be read
+ * (the run then reports the error itself). */
+static unsigned long long file_sum(const char *given)
+{
+    char path[4096];
+    drape_error e;
+    drape_error_clear(&e);
+    if (drape_cli_data_find(given, path, sizeof path, &e) != 0) return 0;
+    size_t len = 0;
+    char *text = drape_cli_read_file(path, DRAPE_YDOC_MAX_BYTES, &len, &e);
+    if (!text) return 0;
+    unsigned long long h = 14695981039346656037ULL;
+    for (size_t i = 0; i < len; i++) {
+        h ^= (unsigned char)text[i];
+        h *= 1099511628211ULL;
+    }
+    drape_free(text);
+    return h ? h : 1;
+}
+
+/* the sum recorded for a row's fabric_file (0: none recorded) */
+static unsigned long long old_sum_of(const batch *b, const char *field)
+{
+    for (int i = 0; i < b->n_old; i++)
+        if (strcmp(b->old_file[i], field) == 0) return b->old_sum[i];
+    return 0;
+}
+
+/* DIR/inputs.sum: "SUM<TAB>fabric_file" for every row, so that --resume
+ * can tell a fabric file edited since its row was made */
+static int write_sums(const batch *b, drape_error *err)
+{
+    char path[BATCH_PATH_MAX + 16];
+    snprintf(path, sizeof path, "%s/inputs.sum", b->dir);
+    drape_cli_afile a;
+    if (drape_cli_afile_open(&a, path, err) != 0) return -1;
+    for (int k = 0; k < b->n + b->n_extra; k++) {
+        char **row = k < b->n ? b->jobs[k].row : b->extra[k - b->n];
+        if (!row) continue;
+        unsigned long long h = k < b->n ? b->jobs[k].sum : old_sum_of(b, row[COL_FILE]);
+        if (h) fprintf(a.f, "%016llx\t%s\n", h, row[COL_FILE]);
+    }
+    return drape_cli_afile_commit(&a, err);
+}
+
+static int read_sums(batch *b, drape_error *err)
+{
+    char path[BATCH_PATH_MAX + 16];
+    snprintf(path, sizeof path, "%s/inputs.sum", b->dir);
+    if (access(path, F_OK) != 0) return 0; /* a batch made before it */
+    char *text = drape_cli_read_file(path, BATCH_MAX_RESULTS, NULL, err);
+    if (!text) return -1;
+    int rc = 0;
+    for (char *line = text, *next; line && *line; line = next) {
+        next = strchr(line, '\n');
+        if (next) *next++ = 0;
+        char *tab = strchr(line, '\t');
+        if (!tab) continue;
+        *tab = 0;
+        char **nf = drape_realloc(b->old_file, (size_t)(b->n_old + 1) * sizeof *nf);
+        unsigned long long *ns = nf ? drape_realloc(b->old_sum, (size_t)(b->n_old + 1) * sizeof *ns)
+                                    : NULL;
+        if (nf) b->old_file = nf;
+        if (ns) b->old_sum = ns;
+        if (!nf || !ns || !(b->old_file[b->n_old] = drape_strdup(tab + 1))) {
+            rc = drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+            break;
+        }
+        b->old_sum[b->n_old++] = strtoull(line, NULL, 16);
+    }
+    drape_free(text);
+    return rc;
+}
+
 static int write_results(const batch *b, drape_error *err)
 {
     drape_cli_afile a;
@@ -224,7 +308,8 @@ static int write_results(const batch *b, drape_error *err)
         }
         fputc('\n', a.f);
     }
-    return drape_cli_afile_commit(&a, err);
+    if (drape_cli_afile_commit(&a, err) != 0) return -1;
+    return write_sums(b, err);
 }
 
 /* DIR/batch.args records the scene and the options passed to the runs;
@@ -239,6 +324,8 @@ static int check_args_stamp(const batch *b, int resume, drape_error *err)
     fprintf(m, "scene %s\n", b->scene);
     for (int i = 0; i + 1 < b->npass; i += 2) fprintf(m, "%s %s\n", b->pass[i], b->pass[i + 1]);
     if (b->frames) fputs("--frames\n", m);
+    long without_sum = ftell(m); /* the stamp of a batch made before the sum */
+    fprintf(m, "scene-sum %016llx\n", file_sum(b->scene));
     if (fclose(m) != 0) {
         free(want);
         return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
@@ -246,6 +333,21 @@ static int check_args_stamp(const batch *b, int resume, drape_error *err)
     snprintf(path, sizeof path, "%s/batch.args", b->dir);
     if (resume && access(path, F_OK) == 0) {
         if (!(have = drape_cli_read_file(path, 1 << 20, NULL, err))) goto out;
+        size_t hn = strlen(have);
+        if (strcmp(have, want) != 0 && hn == (size_t)without_sum &&
+            strncmp(have, want, hn) == 0) { /* the same, from before scene-sum */
+            rc = 0;
+            goto out;
+        }
+        if (strcmp(have, want) != 0 && hn >= (size_t)without_sum &&
+            strncmp(have, want, (size_t)without_sum) == 0) {
+            drape_error_set(err, DRAPE_E_USAGE, path, 0, 0, NULL,
+                            "--resume: the scene file %s changed since this batch "
+                            "started (its scene-sum differs): rows made with the old "
+                            "and the new scene would be mixed; use another --out",
+                            b->scene);
+            goto out;
+        }
         if (strcmp(have, want) != 0) {
             drape_error_set(err, DRAPE_E_USAGE, path, 0, 0, NULL,
                             "--resume: this batch was started with another scene "
@@ -326,14 +428,22 @@ static int load_previous(batch *b, drape_error *err)
         job *jb = NULL;
         for (int k = 0; k < b->n && !jb; k++)
             if (same_file_field(b->jobs[k].fabric, row[COL_FILE])) jb = &b->jobs[k];
+        /* the fabric file edited since this row was made (a sum is on
+         * record and differs): its row is run again, afresh */
+        unsigned long long was = jb ? old_sum_of(b, row[COL_FILE]) : 0;
+        int changed = jb && was && jb->sum && was != jb->sum;
+        if (changed)
+            fprintf(stderr, "drape: batch: %s changed since its row was made: run again\n",
+                    jb->fabric);
         if (jb) {
-            if (b->frames && strcmp(row_status(row), "interrupted") == 0) jb->cont = 1;
+            if (b->frames && !changed && strcmp(row_status(row), "interrupted") == 0) jb->cont = 1;
             if (!jb->row || (jb->state != JOB_DONE && status_done(row_status(row)))) {
-                /* a done row: kept; another (error, interrupted): kept in
-                 * results.csv until the fabric's new run replaces it */
+                /* a done row: kept; another (error, interrupted) or one of
+                 * a changed file: kept in results.csv until the fabric's
+                 * new run replaces it */
                 row_free(jb->row);
                 jb->row = row;
-                if (status_done(row_status(row))) {
+                if (status_done(row_status(row)) && !changed) {
                     jb->state = JOB_DONE;
                     jb->resumed = 1;
                 }
@@ -426,14 +536,17 @@ static int launch(batch *b, job *jb, drape_error *err)
     av[k] = NULL;
 
     fflush(NULL);
+    pid_t parent = getpid();
     pid_t pid = fork();
     if (pid < 0)
         return drape_error_set(err, DRAPE_E_IO, NULL, 0, 0, NULL,
                                "cannot start a process: %s", strerror(errno));
     if (pid == 0) {
         /* own process group: a Ctrl-C at the terminal reaches the batch
-         * only, which lets the running fabrics finish */
+         * only, which lets the running fabrics finish; a batch killed
+         * outright (SIGKILL, the OOM killer) stops them too */
         setpgid(0, 0);
+        drape_cli_stop_with_parent(parent);
         int fi = open("/dev/null", O_RDONLY);
         int fo = open(out_path, O_WRONLY | O_CREAT | O_TRUNC, 0666);
         int fe = open(err_path, O_WRONLY | O_CREAT | O_TRUNC, 0666);
@@ -876,8 +989,9 @@ int drape_cli_batch(int argc, char **argv)
         drape_error_set(&err, DRAPE_E_IO, b.dir, 0, 0, NULL, "path too long");
         goto fail;
     }
+    for (int k = 0; k < b.n; k++) b.jobs[k].sum = file_sum(b.jobs[k].fabric);
     if (check_args_stamp(&b, resume, &err) != 0) goto fail;
-    if (resume && load_previous(&b, &err) != 0) goto fail;
+    if (resume && (read_sums(&b, &err) != 0 || load_previous(&b, &err) != 0)) goto fail;
     for (int k = 0; k < b.n; k++)
         if (b.jobs[k].state == JOB_DONE) {
             b.n_done++;
@@ -989,6 +1103,9 @@ out:
     for (int k = 0; k < b.n; k++) row_free(b.jobs[k].row);
     for (int k = 0; k < b.n_extra; k++) row_free(b.extra[k]);
     drape_free(b.extra);
+    for (int k = 0; k < b.n_old; k++) drape_free(b.old_file[k]);
+    drape_free(b.old_file);
+    drape_free(b.old_sum);
     drape_free(b.jobs);
     return status;
 }

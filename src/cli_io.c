@@ -21,7 +21,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 #include <unistd.h>
 
 #include <json-c/json.h>
@@ -272,12 +276,25 @@ void drape_cli_csv_put(FILE *out, const char *s)
     fputc('"', out);
 }
 
+void drape_cli_stop_with_parent(pid_t parent)
+{
+#ifdef __linux__
+    /* SIGTERM when the parent dies, even of SIGKILL: the child then stops
+     * at its next output point as if interrupted (its checkpoint stays)
+     * instead of running on unseen with its result lost */
+    if (prctl(PR_SET_PDEATHSIG, SIGTERM) == 0 && getppid() != parent) raise(SIGTERM);
+#else
+    (void)parent; /* no such request in POSIX: the child runs on */
+#endif
+}
+
 pid_t drape_cli_fork_pipe(int *fd)
 {
     int fds[2];
     if (pipe(fds) != 0) return -1;
     fflush(stdout);
     fflush(stderr);
+    pid_t parent = getpid();
     pid_t pid = fork();
     if (pid < 0) {
         int e = errno;
@@ -287,6 +304,7 @@ pid_t drape_cli_fork_pipe(int *fd)
         return -1;
     }
     if (pid == 0) {
+        drape_cli_stop_with_parent(parent);
         close(fds[0]);
         *fd = fds[1];
         return 0;

@@ -20,6 +20,11 @@ pid_t drape_cli_fork_pipe(int *fd);
 /* Make directory DIR (one level) if it does not exist; an existing
  * non-directory is an E_IO error naming DIR and `--out`.  created may be
  * NULL; otherwise *created = 1 when this call made DIR. */
+/* In a child just after fork: ask for SIGTERM when the parent (its pid
+ * before the fork) dies, even of SIGKILL (Linux's PR_SET_PDEATHSIG; a
+ * no-op elsewhere).  Async-signal-safe. */
+void drape_cli_stop_with_parent(pid_t parent);
+
 int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
 /* DIR/NAME can be replaced by a file at the end of a run: it does not
  * exist or is not a directory.  0, or -1 with an E_IO error. */

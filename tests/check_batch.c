@@ -442,6 +442,64 @@ START_TEST(test_resume)
 }
 END_TEST
 
+/* --resume after the inputs were edited: a fabric file whose text changed
+ * since its row was made runs again (its old row had been kept, made
+ * from the old text); a changed scene file is refused (exit 2), as other
+ * options are.  Any change of bytes counts, a comment too. */
+START_TEST(test_resume_changed_inputs)
+{
+    const char *dir = subdir("changed");
+    static char text[CAP];
+    char fab[1024], scene[1024], fabrics[2200], args[4096], p[1200];
+    ck_assert_int_eq(read_text(COTTON, text, CAP), 0);
+    snprintf(fab, sizeof fab, "%s", tu_write_file("changed-fabric.yaml", text));
+    ck_assert_int_eq(read_text(SCENE, text, CAP), 0);
+    /* the scene's fabric by an absolute path, from the scratch directory */
+    char cwd[600], *fl = strstr(text, "fabric: ../"), *rest;
+    ck_assert_ptr_nonnull(fl);
+    ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
+    rest = strchr(fl, '\n');
+    static char text2[CAP];
+    snprintf(text2, sizeof text2, "%.*sfabric: %s/%.*s%s", (int)(fl - text), text, cwd,
+             (int)(rest - fl - 8), fl + 8, rest);
+    snprintf(scene, sizeof scene, "%s", tu_write_file("changed-scene.yaml", text2));
+    snprintf(fabrics, sizeof fabrics, "%s %s", fab, DENIM);
+    snprintf(args, sizeof args, "batch -q %s %s " TINY " --out %s", scene, fabrics, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    clear_logs(dir);
+
+    snprintf(args, sizeof args, "batch -q %s %s " TINY " --out %s --resume", scene, fabrics, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert(!has_log(dir, "changed-fabric") && !has_log(dir, "denim-wang"));
+
+    FILE *f = fopen(fab, "a");
+    ck_assert_ptr_nonnull(f);
+    fputs("# edited\n", f);
+    fclose(f);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert(has_log(dir, "changed-fabric") && !has_log(dir, "denim-wang"));
+    ck_assert_msg(strstr(err, "changed since its row was made: run again"), "%s", err);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    ck_assert_str_eq(cell(t, 0, "status"), "t_max");
+    free(t);
+    clear_logs(dir); /* and now it is on record */
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert(!has_log(dir, "changed-fabric"));
+
+    f = fopen(scene, "a");
+    ck_assert_ptr_nonnull(f);
+    fputs("# edited\n", f);
+    fclose(f);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "changed since this batch started"), "%s", err);
+    snprintf(p, sizeof p, "%s/inputs.sum", dir);
+    ck_assert_int_eq(access(p, F_OK), 0);
+}
+END_TEST
+
 START_TEST(test_failed_run)
 {
     /* a numerical failure gives a row with status failed and the message;
@@ -611,6 +669,49 @@ END_TEST
  * its row says interrupted (exit status 143); --resume with --frames
  * continues that run from its checkpoint (`drape run --resume`) and the
  * row then matches a direct, uninterrupted run (up to the tolerance). */
+/* A batch killed outright (SIGKILL: the OOM killer, a hard job limit)
+ * cannot stop its runs; they ran on unseen to their end.  Each run now
+ * gets SIGTERM when the batch dies and ends as interrupted, its row in
+ * its log and its checkpoint kept for --resume. */
+START_TEST(test_killed_batch_stops_runs)
+{
+    const char *dir = subdir("killed");
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    char first[1024], log[1024], cmd[2400];
+    snprintf(first, sizeof first, "%s/frames/cotton-breen/frame_000001.obj", dir);
+    snprintf(log, sizeof log, "%s/logs/cotton-breen.csv", dir);
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(bin, "drape", "batch", "-q", SCENE, COTTON, "--spacing", "5cm", "--t-max", "600s",
+              "--frames", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    struct timespec ts = {0, 1000 * 1000};
+    for (int i = 0; i < 20000 && access(first, F_OK) != 0; i++) nanosleep(&ts, NULL);
+    ck_assert_msg(access(first, F_OK) == 0, "the run did not start");
+    kill(pid, SIGKILL);
+    ck_assert_int_eq(waitpid(pid, NULL, 0), pid);
+    int stopped = 0;
+    for (int i = 0; i < 200 && !stopped; i++) { /* 10 s */
+        snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
+        stopped = system(cmd) == 0;
+        if (!stopped) {
+            struct timespec w = {0, 50 * 1000 * 1000};
+            nanosleep(&w, NULL);
+        }
+    }
+    if (!stopped) { /* do not leave it running */
+        snprintf(cmd, sizeof cmd, "pkill -TERM -f -- '--out %s/frames/cotton-breen'", dir);
+        if (system(cmd) != 0) { /* nothing matched */ }
+    }
+    ck_assert_msg(stopped, "the run went on after its batch was killed");
+    snprintf(cmd, sizeof cmd, "%s/frames/cotton-breen/drape.h5", dir);
+    ck_assert_msg(access(cmd, F_OK) == 0, "no checkpoint");
+}
+END_TEST
+
 /* Two fabrics with one file name in two directories get the frame
  * directories a and a-2 in command-line order; a --resume that lists them
  * the other way round continued each from the other's checkpoint (rows
@@ -758,6 +859,8 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_bad_corpus);
     tcase_add_test(tc, test_interrupted_row_resumed);
     tcase_add_test(tc, test_resume_swapped_names);
+    tcase_add_test(tc, test_killed_batch_stops_runs);
+    tcase_add_test(tc, test_resume_changed_inputs);
     suite_add_tcase(s, tc);
     return s;
 }

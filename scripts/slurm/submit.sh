@@ -22,11 +22,13 @@
 # repository this script is in; it must be reachable from the nodes.
 #
 # Without --resume the array's earlier rows in DIR are removed first; with
-# it, the fabric list must be the same and done fabrics are skipped.
+# it, the fabric list, the scene and the run options must be the same
+# (DIR/fabrics.txt, DIR/submit.args) and done fabrics are skipped.
 #
 # Exit status: 0 every fabric reached equilibrium or t_max; 6 at least one
-# failed or has no row; 2 bad command line; 3 DIR cannot be written or
-# sbatch failed to submit.
+# failed or has no row; 2 bad command line, or a task refused its own
+# (a scene file changed since the first submission); 3 DIR cannot be
+# written or sbatch failed to submit.
 set -u
 
 usage() {
@@ -76,15 +78,23 @@ export DRAPE
 mkdir -p "$out" || exit 3
 out=$(cd "$out" && pwd)
 list=$(printf '%s\n' "${fabrics[@]}")
+# the scene and run options, one per line: every task's `drape batch
+# --resume` would refuse others (exit 2) after the whole array had run
+args=$(printf '%s\n' "$scene" ${run_opts[@]+"${run_opts[@]}"})
 if [ "$resume" = 1 ] && [ -f "$out/fabrics.txt" ]; then
     if [ "$list" != "$(cat "$out/fabrics.txt")" ]; then
         echo "submit.sh: --resume: $out/fabrics.txt lists other fabrics; use the same ones or another --out" >&2
+        exit 2
+    fi
+    if [ -f "$out/submit.args" ] && [ "$args" != "$(cat "$out/submit.args")" ]; then
+        echo "submit.sh: --resume: $out/submit.args shows another scene or other run options; use the same ones or another --out" >&2
         exit 2
     fi
 elif [ "$resume" = 0 ]; then
     rm -rf "$out/tasks" "$out/slurm"
 fi
 printf '%s\n' "$list" > "$out/fabrics.txt.tmp" && mv "$out/fabrics.txt.tmp" "$out/fabrics.txt" || exit 3
+printf '%s\n' "$args" > "$out/submit.args.tmp" && mv "$out/submit.args.tmp" "$out/submit.args" || exit 3
 mkdir -p "$out/tasks" "$out/slurm" || exit 3
 
 array="0-$((n - 1))${throttle:+%$throttle}"
@@ -142,4 +152,8 @@ missing=0
 mv "$out/results.csv.tmp" "$out/results.csv" || exit 3
 echo "submit.sh: $out/results.csv ($n rows, $missing without a task row)" >&2
 if [ "$rc" -eq 0 ] && [ "$missing" -eq 0 ]; then exit 0; fi
+if [ "$rc" -eq 2 ]; then # a task refused its command line (a changed scene file)
+    echo "submit.sh: a task refused its command line (exit status 2); see $out/slurm/*.out" >&2
+    exit 2
+fi
 exit 6
