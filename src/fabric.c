@@ -635,6 +635,21 @@ static int get_kes(const drape_yread *r, const drape_ynode *kn,
                                          "smaller than 2HG (at 0.5 deg); the "
                                          "construction needs 2HG5 >= 2HG");
         }
+        /* the widths of the loops are forces (moments) per length, not
+         * per angle: an angle unit there (dimensionless to the unit parser)
+         * scaled them by 57 or 1/57 unseen */
+        static const char *const no_angle[] = {"B", "2HB", "2HG", "2HG5"};
+        for (int i = 0; i < 4; i++) {
+            const drape_ynode *q = drape_ynode_get(dn, no_angle[i], NULL);
+            if (q && q->type == DRAPE_YNODE_SCALAR &&
+                (strstr(q->scalar, "deg") || strstr(q->scalar, "rad"))) {
+                drape_yread_path(kp, sizeof kp, pp, no_angle[i]);
+                return drape_yread_error(r, q, kp, DRAPE_E_INPUT,
+                                         "%s takes no angle unit (KES gives it per length "
+                                         "or per width: gf/cm, gf.cm/cm, gf.cm^2/cm), got "
+                                         "\"%s\"", no_angle[i], q->scalar);
+            }
+        }
         kes_bending(B, hb2, &f->bend[d]);
         kes_shear(G, hg2, hg52, &f->shear[d]);
     }

@@ -592,6 +592,9 @@ static const bad_case bad[] = {
      5, 30, "kes.warp.G", "write the angle unit, last and once"},
     {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf.rad/cm/deg}\n", DRAPE_E_INPUT,
      5, 30, "kes.warp.G", "write the angle unit, last and once"},
+    /* "  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm/deg, 2HG: " is 47 bytes */
+    {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm/deg, 2HG: 1.2 gf/cm/deg}\n",
+     DRAPE_E_INPUT, 5, 48, "kes.warp.2HG", "2HG takes no angle unit"},
     {KES_HEAD "kes:\n  warp: {B: 1 gf.cm/cm, G: 1 gf/cm/deg}\n", DRAPE_E_INPUT,
      5, 13, "kes.warp.B", "expected a moment (N.m), got gf.cm/cm"},
     {KES_HEAD "kes:\n  warp: {B: 1 gf.cm^2/cm, G: 1 gf/cm/deg, 2HB: -1 "
