@@ -468,6 +468,16 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     }
     if (ra->check_only) goto out;
 
+    if (out_dir && !(s.has_frames && s.out_obj) && !s.out_hdf5 && !ra->no_warnings &&
+        s.kind != DRAPE_SCENE_CUSICK && s.kind != DRAPE_SCENE_TABLE) {
+        drape_error w;
+        drape_error_clear(&w);
+        drape_error_set(&w, DRAPE_E_INPUT, scene_path, 0, 0, "output",
+                        "--out: the scene asks for no frames and no drape.h5 (e.g. `output: "
+                        "{frames: {every: 0.1 s, obj: true}, hdf5: true}`): %s gets only the "
+                        "checkpoint of an interrupted dynamic run", out_dir);
+        drape_cli_warn(NULL, &w);
+    }
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
         if (!child && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
@@ -800,6 +810,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                     "frame_%06d.obj)\n", out_dir, gone, gone == 1 ? "" : "s", rc.frame);
     }
     if (rc.obj) { drape_obj_free(rc.obj); rc.obj = NULL; }
+    if (created_dir && !interrupted) rmdir(out_dir); /* only if nothing was written */
     if (child) {
         drape_cli_result_write(child->out, &r);
         if (have_dc) {

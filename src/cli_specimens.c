@@ -29,6 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/time.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -436,6 +437,23 @@ int drape_cli_specimens_run(const run_args *a)
         goto fail;
     }
     if (a->out_dir && drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0) goto fail;
+    if (a->out_dir && !a->no_warnings) { /* an earlier, larger ensemble's specimens */
+        char sd[4200];
+        struct stat sst;
+        int k = n + 1;
+        for (; k < 1000; k++) {
+            snprintf(sd, sizeof sd, "%s/specimen-%03d", a->out_dir, k);
+            if (stat(sd, &sst) != 0) break;
+        }
+        if (k == n + 2)
+            fprintf(stderr, "drape: %s: warning: specimen-%03d is of an earlier ensemble "
+                    "(this one has %d specimens, and shadow.svg shows only them)\n",
+                    a->out_dir, n + 1, n);
+        else if (k > n + 2)
+            fprintf(stderr, "drape: %s: warning: specimen-%03d to specimen-%03d are of an "
+                    "earlier ensemble (this one has %d specimens, and shadow.svg shows only "
+                    "them)\n", a->out_dir, n + 1, k - 1, n);
+    }
     if (a->out_dir && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
         drape_cli_check_target(a->out_dir, "shadow.svg", &err) != 0)
         goto fail;

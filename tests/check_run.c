@@ -181,6 +181,18 @@ START_TEST(test_output_dir_errors)
     ck_assert_str_eq(out, "");
     ck_assert_ptr_nonnull(strstr(err, "not-a-dir"));
 
+    /* a scene that asks for no output (the cantilever): said, and no empty
+     * directory is left behind */
+    {
+        char dir[600];
+        snprintf(dir, sizeof dir, "%s/nothing-asked", tu_scratch_dir());
+        snprintf(args, sizeof args, "run -q ../scenes/cantilever.yaml --out '%s'", dir);
+        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+        ck_assert_msg(strstr(err, "output: warning: --out: the scene asks for no frames"), "%s",
+                      err);
+        ck_assert_msg(access(dir, F_OK) != 0, "%s was left behind", dir);
+    }
+
     /* a directory where drape.h5 or drape.xmf is to be renamed at the end:
      * refused before the run (it was found at the end, the computation
      * lost and the frames left behind) */

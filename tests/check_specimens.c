@@ -286,6 +286,18 @@ START_TEST(test_ensemble_input_errors)
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
     ck_assert_int_eq(system(cmd), 0);
 
+    /* specimen directories of an earlier, larger ensemble in DIR: said */
+    snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir -p %s/specimen-003 %s/specimen-004", dir, dir,
+             dir);
+    ck_assert_int_eq(system(cmd), 0);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 2 -j 1 --out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_msg(strstr(err, "specimen-003 to specimen-004 are of an earlier ensemble"), "%s",
+                  err);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    ck_assert_int_eq(system(cmd), 0);
+
     /* a cantilever has no DC: its ensemble succeeds when its specimens do */
     st = tu_run_drape("run -q ../scenes/cantilever.yaml --method static --specimens 2 -j 1", out,
                       CAP, err, CAP);
