@@ -72,7 +72,9 @@ static const char batch_usage[] =
     "\n"
     "Exit status: 0 every fabric reached equilibrium or t_max; 6 at least one\n"
     "run failed or could not run (see its row); 1 invalid scene; 2 bad command\n"
-    "line; 3 DIR or results.csv cannot be written; 5 out of memory; 130\n"
+    "line; 3 the scene file (or the fabric it names: it must exist, as for\n"
+    "`drape check`) cannot be read, or DIR or results.csv cannot be written;\n"
+    "5 out of memory; 130\n"
     "interrupted (SIGINT); 143 terminated (SIGTERM).\n";
 
 #define BATCH_EXIT_SOME_FAILED 6

@@ -50,8 +50,9 @@ static const char compare_usage[] =
     "both are of the same fabric, scene, energy_form, terms and spacing_m;\n"
     "0 when one differs, with a warning on stderr for each difference; null\n"
     "when a file does not say) and both inputs'\n"
-    "n, dc, dc_sd, dc_ci95, nodes_hist, cpu_per_specimen_s, fabric, scene,\n"
-    "energy_form, terms, spacing_m.  A p value below 0.05 means the two\n"
+    "n, dc, dc_sd, dc_ci95, nodes (the most frequent count), nodes_hist,\n"
+    "cpu_per_specimen_s, fabric, scene, energy_form, terms, spacing_m, in the\n"
+    "objects `reference` and `other`.  A p value below 0.05 means the two\n"
     "differ at the 5 % level (docs/ensemble.md).\n"
     "\n"
     "Exit status: 0 success, 1 a file is not a drape result, 2 bad command\n"
@@ -162,11 +163,13 @@ static int load(const char *path, side *s, json_object **keep, drape_error *err)
     }
     drape_ensemble_stats_compute(dcs, nodes, n, &s->st);
     s->ndc = 0;
+    /* the specimens the statistics count (a DC and a node count), for
+     * the KS test too: one with a DC but no node count was in KS only */
     for (int k = 0; k < n; k++)
-        if (isfinite(dcs[k])) s->dc[s->ndc++] = dcs[k];
+        if (isfinite(dcs[k]) && nodes[k] >= 0) s->dc[s->ndc++] = dcs[k];
     if (s->st.n == 0)
         return drape_error_set(err, DRAPE_E_INPUT, path, 0, 0, "specimens",
-                               "no specimen with a drape coefficient");
+                               "no specimen with a drape coefficient and a node count");
     s->cpu_per = cpu / (n > 0 ? n : 1);
     return 0;
 }

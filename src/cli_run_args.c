@@ -23,7 +23,7 @@
 
 static const char run_usage[] =
     "Usage: drape run [SCENE.yaml] [OPTIONS]\n"
-    "       drape run --resume DIR [--format json|csv] [-q]\n"
+    "       drape run --resume DIR [--format json|csv] [-q] [-j N]\n"
     "\n"
     "Run a scene (default " DEFAULT_SCENE ") and print one JSON object on\n"
     "stdout with the result in SI units (keys: fabric, scene, integrator,\n"
@@ -395,7 +395,7 @@ int drape_cli_run(int argc, char **argv)
         return usage_error("--resume: no scene file with it (the run's is stored in %s/drape.h5), got `%s'",
                            resume_dir, argv[optind]);
     if (resume_dir && run_opt)
-        return usage_error("--resume: only --format and -q go with it (the run's options are "
+        return usage_error("--resume: only --format, -q and -j go with it (the run's options are "
                            "stored in %s/drape.h5), got `%s'", resume_dir, run_opt);
     /* the default scene and paths not found here: the data directories
      * (cli_data.h; a resumed run's paths are stored absolute) */

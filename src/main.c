@@ -40,6 +40,7 @@ static const char usage_text[] =
     "                       time, counters, error against a reference);\n"
     "                       --kernels: cost of one force and Jacobian\n"
     "                       evaluation by lattice size (docs/performance.md)\n"
+    "  help                 this help\n"
     "\n"
     "Options:\n"
     "  -h, --help           show this help and exit\n"

@@ -150,6 +150,12 @@ START_TEST(test_welch_example)
     drape_ensemble_stats_compute(a2, nd, 15, &s2);
     double p = drape_ensemble_welch_p(&s1, &s2);
     ck_assert_msg(fabs(p - 0.021) < 0.0015, "p = %.17g", p);
+    /* to more digits (mpmath's Student t at the Welch-Satterthwaite
+     * nu = 24.9885, a review's computation): a wrong nu (pooled, n for
+     * n - 1) moves p in the third digit and failed nothing above */
+    ck_assert_msg(fabs(p - 0.0213780014629) < 1e-8 * 0.0213780014629, "p = %.17g", p);
+    ck_assert_msg(fabs(drape_ensemble_welch_ci95(&s1, &s2) - 1.81742960047) < 1e-9,
+                  "half-width %.17g", drape_ensemble_welch_ci95(&s1, &s2));
     ck_assert_close_rel(drape_ensemble_welch_p(&s2, &s1), p, 1e-12);
     /* the interval of the difference and the test agree: moving the second
      * sample until its mean lies exactly one half-width from the first
@@ -236,6 +242,90 @@ START_TEST(test_ks_p_limits)
 }
 END_TEST
 
+/* Every first row x of a 2 x k table with column totals col and sum left,
+ * from column j on: the sum of P over the tables no more probable than
+ * lp0 (brute force, for test_freeman_halton_large). */
+static double brute(const int *col, int k, int j, int left, double lp, double lden, double lp0)
+{
+    if (j == k) {
+        if (left != 0) return 0.0;
+        return lp - lden <= lp0 + 1e-7 ? exp(lp - lden) : 0.0;
+    }
+    double s = 0.0;
+    for (int x = 0; x <= col[j] && x <= left; x++)
+        s += brute(col, k, j + 1, left - x, lp + lgamma(col[j] + 1) - lgamma(x + 1) -
+                   lgamma(col[j] - x + 1), lden, lp0);
+    return s;
+}
+
+/* The exact test's bounds change nothing: a 2 x 6 table against every
+ * table enumerated; large ensembles no longer take minutes (200 against
+ * 200 over 7 node counts enumerated about 2e10 tables: this test timed
+ * out); with all 33 bins occupied the answer is still that of the test. */
+START_TEST(test_freeman_halton_large)
+{
+    int a[] = {3, 5, 7, 6, 4, 2}, b[] = {6, 4, 3, 5, 7, 5}, col[6];
+    int na = 0, nb = 0;
+    for (int j = 0; j < 6; j++) {
+        col[j] = a[j] + b[j];
+        na += a[j];
+        nb += b[j];
+    }
+    double lden = lgamma(na + nb + 1) - lgamma(na + 1) - lgamma(nb + 1), lp0 = -lden;
+    for (int j = 0; j < 6; j++)
+        lp0 += lgamma(col[j] + 1) - lgamma(a[j] + 1) - lgamma(col[j] - a[j] + 1);
+    double want = brute(col, 6, 0, na, 0.0, lden, lp0);
+    ck_assert(want > 0.05 && want < 0.9);
+    ck_assert_close_rel(drape_ensemble_exact_p(a, b, 6), want, 1e-9);
+    /* identical histograms of 200: the observed table is the most probable */
+    int c[] = {10, 30, 50, 50, 35, 20, 5};
+    ck_assert_close_rel(drape_ensemble_exact_p(c, c, 7), 1.0, 1e-9);
+    /* 33 occupied bins */
+    int u[DRAPE_ENSEMBLE_MAX_NODES + 1], v[DRAPE_ENSEMBLE_MAX_NODES + 1];
+    for (int j = 0; j <= DRAPE_ENSEMBLE_MAX_NODES; j++) {
+        u[j] = 20;
+        v[j] = j < 16 ? 38 : 2;
+    }
+    ck_assert_close_rel(drape_ensemble_exact_p(u, u, DRAPE_ENSEMBLE_MAX_NODES + 1), 1.0, 1e-9);
+    ck_assert(drape_ensemble_exact_p(u, v, DRAPE_ENSEMBLE_MAX_NODES + 1) < 1e-3);
+}
+END_TEST
+
+/* All DCs equal: the mean is that value and there is no spread (sum / n
+ * rounds: 3 x 0.1 gave 0.10000000000000002 and an sd of 1e-17, and two
+ * identical ensembles then differed at p = 5e-5 by Welch's test). */
+START_TEST(test_stats_equal)
+{
+    double x[15];
+    int nd[15] = {0};
+    for (int k = 0; k < 15; k++) x[k] = k < 3 ? 0.1 : 0.675;
+    drape_ensemble_stats s, t, u;
+    drape_ensemble_stats_compute(x, nd, 3, &s);
+    ck_assert(s.dc_mean == 0.1 && s.dc_sd == 0.0 && s.dc_ci95 == 0.0);
+    drape_ensemble_stats_compute(x + 3, nd, 12, &t);
+    drape_ensemble_stats_compute(x + 3, nd, 10, &u);
+    ck_assert(t.dc_mean == 0.675 && t.dc_sd == 0.0);
+    ck_assert(isnan(drape_ensemble_welch_p(&t, &u)));
+}
+END_TEST
+
+/* Two samples of 100 DCs 5e-5 apart each, 0.005 apart as a whole, every
+ * DC of the first below every DC of the second: D = 1 and the smallest p.
+ * Values were grouped by a chain of neighbours within 1e-4 of each
+ * other, which made each sample, then both, one value: D = 0, p = 1. */
+START_TEST(test_ks_dense)
+{
+    double a[100], b[100];
+    for (int k = 0; k < 100; k++) {
+        a[k] = 0.70000 + 0.00005 * k;
+        b[k] = 0.70500 + 0.00005 * k;
+    }
+    ck_assert_double_eq_tol(drape_ensemble_ks_d(a, 100, b, 100), 1.0, 1e-15);
+    ck_assert_double_eq_tol(drape_ensemble_ks_p(a, 100, b, 100),
+                            1.0 / (1.0 + DRAPE_ENSEMBLE_KS_PERMUTATIONS), 1e-15);
+}
+END_TEST
+
 Suite *ensemble_suite(void)
 {
     Suite *s = suite_create("ensemble");
@@ -249,6 +339,9 @@ Suite *ensemble_suite(void)
     tcase_add_test(tc, test_ks_d_by_hand);
     tcase_add_test(tc, test_ks_p_exact);
     tcase_add_test(tc, test_ks_p_limits);
+    tcase_add_test(tc, test_freeman_halton_large);
+    tcase_add_test(tc, test_stats_equal);
+    tcase_add_test(tc, test_ks_dense);
     suite_add_tcase(s, tc);
     return s;
 }
