@@ -314,6 +314,35 @@ static int write_results(const batch *b, drape_error *err)
     return write_sums(b, err);
 }
 
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* 1 if texts x and y hold the same lines in any order, leaving out those
+ * that start with skip (NULL: none). */
+static int same_lines(const char *x, const char *y, const char *skip)
+{
+    enum { MAXL = 128 };
+    char *t[2] = {drape_strdup(x), drape_strdup(y)}, *l[2][MAXL];
+    int n[2] = {0, 0}, same = t[0] && t[1];
+    for (int s = 0; s < 2 && same; s++) {
+        for (char *p = t[s], *q; p && *p; p = q) {
+            q = strchr(p, '\n');
+            if (q) *q++ = 0;
+            if (skip && strncmp(p, skip, strlen(skip)) == 0) continue;
+            if (n[s] == MAXL) { same = 0; break; }
+            l[s][n[s]++] = p;
+        }
+        qsort(l[s], (size_t)n[s], sizeof l[s][0], cmp_str);
+    }
+    same = same && n[0] == n[1];
+    for (int i = 0; same && i < n[0]; i++) same = strcmp(l[0][i], l[1][i]) == 0;
+    drape_free(t[0]);
+    drape_free(t[1]);
+    return same;
+}
+
 /* DIR/batch.args records the scene and the options passed to the runs;
  * --resume refuses a directory made with other ones. */
 static int check_args_stamp(const batch *b, int resume, drape_error *err)
@@ -326,7 +355,6 @@ static int check_args_stamp(const batch *b, int resume, drape_error *err)
     fprintf(m, "scene %s\n", b->scene);
     for (int i = 0; i + 1 < b->npass; i += 2) fprintf(m, "%s %s\n", b->pass[i], b->pass[i + 1]);
     if (b->frames) fputs("--frames\n", m);
-    long without_sum = ftell(m); /* the stamp of a batch made before the sum */
     fprintf(m, "scene-sum %016llx\n", file_sum(b->scene));
     if (fclose(m) != 0) {
         free(want);
@@ -335,14 +363,16 @@ static int check_args_stamp(const batch *b, int resume, drape_error *err)
     snprintf(path, sizeof path, "%s/batch.args", b->dir);
     if (resume && access(path, F_OK) == 0) {
         if (!(have = drape_cli_read_file(path, 1 << 20, NULL, err))) goto out;
-        size_t hn = strlen(have);
-        if (strcmp(have, want) != 0 && hn == (size_t)without_sum &&
-            strncmp(have, want, hn) == 0) { /* the same, from before scene-sum */
+        /* the same lines in any order: `--seed 3 --spacing 5mm` is the
+         * batch of `--spacing 5mm --seed 3` (each option occurs once) */
+        int same = same_lines(have, want, NULL);
+        int same_but_sum = !same && same_lines(have, want, "scene-sum ");
+        int have_sum = strncmp(have, "scene-sum ", 10) == 0 || strstr(have, "\nscene-sum ");
+        if (same || (same_but_sum && !have_sum)) { /* (or made before scene-sum) */
             rc = 0;
             goto out;
         }
-        if (strcmp(have, want) != 0 && hn >= (size_t)without_sum &&
-            strncmp(have, want, (size_t)without_sum) == 0) {
+        if (same_but_sum) {
             drape_error_set(err, DRAPE_E_USAGE, path, 0, 0, NULL,
                             "--resume: the scene file %s changed since this batch "
                             "started (its scene-sum differs): rows made with the old "
@@ -350,7 +380,7 @@ static int check_args_stamp(const batch *b, int resume, drape_error *err)
                             b->scene);
             goto out;
         }
-        if (strcmp(have, want) != 0) {
+        {
             drape_error_set(err, DRAPE_E_USAGE, path, 0, 0, NULL,
                             "--resume: this batch was started with another scene "
                             "or other options; use the same ones (listed in this "

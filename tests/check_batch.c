@@ -431,8 +431,13 @@ START_TEST(test_resume)
     ck_assert_int_eq(u->nrow, 3);
     ck_assert_str_eq(cell(u, 2, "status"), "error");
 
-    /* other run options: refused */
+    /* the same options in another order: the same batch (was refused) */
     char args[2048];
+    snprintf(args, sizeof args, "batch -q %s %s --t-max 0.05s --spacing 5cm --out %s --resume",
+             SCENE, COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+
+    /* other run options: refused */
     snprintf(args, sizeof args, "batch -q %s %s --spacing 4cm --t-max 0.05s --out %s --resume",
              SCENE, COTTON, dir);
     ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
