@@ -220,6 +220,14 @@ static const char *signal_name(int sig)
  * the run uses it (ctx: the scene's DRAPE_TERM_* mask): a library run in
  * the seed's model (--terms without bias) is not told about a term it
  * leaves out.  `drape check` prints them all. */
+/* A number of the checkpoint's /stats (the interrupted run's result):
+ * NAN where it is missing, text or not finite. */
+static double ck_stat(const resume_info *ri, const char *key)
+{
+    const drape_kv *kv = drape_kv_find(ri->ck.stats, ri->ck.n_stats, key);
+    return kv && !kv->text && isfinite(kv->value) ? kv->value : NAN;
+}
+
 static void fabric_warn(void *ctx, const drape_error *w)
 {
     unsigned terms = *(const unsigned *)ctx;
@@ -498,16 +506,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.t_max = s.t_max;
     rc.frame = ri ? ri->frames : 0;
     if (ri) { /* the energy balance covers the whole run, as the counters do */
-        const drape_kv *e0 = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "energy_total_start_J");
-        const drape_kv *e1 = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "energy_total_end_J");
-        const drape_kv *emr = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "energy_max_rise_J");
-        const drape_kv *sp = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "max_strain_peak");
-        if (e0 && !e0->text && isfinite(e0->value) && e1 && !e1->text && isfinite(e1->value)) {
+        double e0 = ck_stat(ri, "energy_total_start_J"), e1 = ck_stat(ri, "energy_total_end_J");
+        double emr = ck_stat(ri, "energy_max_rise_J"), sp = ck_stat(ri, "max_strain_peak");
+        if (isfinite(e0) && isfinite(e1)) {
             rc.n_energy = 1;
-            rc.e_start = e0->value;
-            rc.e_prev = rc.e_end = e1->value;
-            rc.e_max_rise = emr && !emr->text && isfinite(emr->value) ? emr->value : -INFINITY;
-            rc.strain_peak = sp && !sp->text && isfinite(sp->value) ? sp->value : 0.0;
+            rc.e_start = e0;
+            rc.e_prev = rc.e_end = e1;
+            rc.e_max_rise = isfinite(emr) ? emr : -INFINITY;
+            rc.strain_peak = isfinite(sp) ? sp : 0.0;
         }
     }
 
@@ -549,8 +555,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
             drape_cli_resume_add_previous(&ri->ck, "lin_iters", &res.stats.lin_iters);
             drape_cli_resume_add_previous(&ri->ck, "lin_factors", &res.stats.lin_factors);
             drape_cli_resume_add_previous(&ri->ck, "integrator_switches", &res.stats.switches);
-            const drape_kv *w = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "wall_s");
-            if (w && !w->text && w->value >= 0) res.wall_s += w->value;
+            double w = ck_stat(ri, "wall_s");
+            if (w >= 0) res.wall_s += w;
         }
     }
     if (!sim_ok && err.kind != DRAPE_E_NUMERIC && !interrupted) goto fail; /* I/O or input: no result */
@@ -654,11 +660,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     one.r_min_m = have_dc ? sh.r_min_m : NAN;
     one.r_max_m = have_dc ? sh.r_max_m : NAN;
     /* a resumed run's CPU time counts the time before it, as wall_s does */
-    double cpu_prev = 0.0;
-    if (ri) {
-        const drape_kv *c = drape_kv_find(ri->ck.stats, ri->ck.n_stats, "cpu_s");
-        if (c && !c->text && c->value >= 0) cpu_prev = c->value;
-    }
+    double cpu_prev = ri ? ck_stat(ri, "cpu_s") : 0.0;
+    if (!(cpu_prev >= 0)) cpu_prev = 0.0;
     one.cpu_s = drape_cli_cpu_s() - cpu0 + cpu_prev;
     drape_cli_result_num(&r, "cpu_s", drape_cli_cpu_s() + cpu_prev);
     drape_cli_result_num(&r, "dc_sd", NAN);

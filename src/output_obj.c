@@ -148,19 +148,27 @@ void drape_obj_discard(drape_obj *o)
     drape_obj_free(o);
 }
 
+/* DIR/frame_NNNNNN.obj of frame k, newly allocated (NULL: no memory). */
+static char *frame_path(const drape_obj *o, int k)
+{
+    size_t len = strlen(o->dir) + 32;
+    char *path = drape_malloc(len);
+    if (path) snprintf(path, len, "%s/frame_%06d.obj", o->dir, k);
+    return path;
+}
+
 int drape_obj_remove_stale(drape_obj *o, int first)
 {
     if (!o) return 0;
-    size_t len = strlen(o->dir) + 32;
-    char *path = drape_malloc(len);
-    if (!path) return 0;
     int n = 0;
     for (int k = first; k >= 0 && k < 1000000; k++) {
-        snprintf(path, len, "%s/frame_%06d.obj", o->dir, k);
-        if (unlink(path) != 0) break; /* the frames are numbered 0, 1, ... */
+        char *path = frame_path(o, k);
+        if (!path) break;
+        int gone = unlink(path) == 0;
+        drape_free(path);
+        if (!gone) break; /* the frames are numbered 0, 1, ... */
         n++;
     }
-    drape_free(path);
     return n;
 }
 
@@ -272,11 +280,9 @@ out:
 int drape_obj_frame(drape_obj *o, int frame, double t_s, const double *x,
                     drape_error *err)
 {
-    size_t len = strlen(o->dir) + 32;
-    char *path = drape_malloc(len);
+    char *path = frame_path(o, frame);
     if (!path)
         return drape_error_set(err, DRAPE_E_NOMEM, o->dir, 0, 0, NULL, "out of memory");
-    snprintf(path, len, "%s/frame_%06d.obj", o->dir, frame);
     int rc = drape_obj_write(o, path, t_s, x, err);
     drape_free(path);
     return rc;
