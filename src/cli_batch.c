@@ -5,7 +5,9 @@
  * keys of `drape run` (its CSV header), and `error`.  The file is replaced
  * atomically after each finished fabric, so a batch that is killed keeps
  * every row it finished; --resume skips the fabrics whose row is done.
- * Contract, file layout and exit statuses: docs/batch.md. */
+ * The rows, sums and stamp in DIR, and their reading by --resume:
+ * cli_batch_record.c.  Contract, file layout and exit statuses:
+ * docs/batch.md. */
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
@@ -19,6 +21,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_batch.h"
 #include "cli_data.h"
 #include "cli_io.h"
 #include "drape/alloc.h"
@@ -77,59 +80,6 @@ static const char batch_usage[] =
     "5 out of memory; 130\n"
     "interrupted (SIGINT); 143 terminated (SIGTERM).\n";
 
-#define BATCH_EXIT_SOME_FAILED 6
-#define BATCH_EXIT_SIGINT 130  /* 128 + SIGINT, as shells report it */
-#define BATCH_EXIT_SIGTERM 143 /* 128 + SIGTERM */
-#define BATCH_MAX_JOBS 1024
-#define BATCH_DEFAULT_DIR "batch-out"
-#define BATCH_MAX_RESULTS (256L * 1024 * 1024) /* results.csv read on --resume */
-#define BATCH_MAX_CHILD_OUT (1024L * 1024)    /* a run's stdout or stderr */
-#define BATCH_PATH_MAX 4096
-#define BATCH_NAME_MAX 100
-
-/* The keys of `drape run --format csv`, in its order (cli_run.c; the
- * contract of issue 3).  A child's row is mapped onto these by name;
- * tests/check_batch.c checks that the list matches the run's header. */
-/* The run's result keys (cli_run.c), the columns between file and error. */
-#define run_keys drape_cli_run_keys
-#define N_RUN_KEYS drape_cli_run_nkeys()
-/* results.csv columns: fabric_file, the run keys, error */
-#define N_COLS (N_RUN_KEYS + 2)
-#define COL_FILE 0
-#define COL_ERROR (N_COLS - 1)
-
-enum job_state { JOB_TODO, JOB_RUNNING, JOB_DONE, JOB_KILLED };
-
-typedef struct job {
-    const char *fabric;          /* as given on the command line */
-    char name[BATCH_NAME_MAX + 8]; /* unique, file-name safe: logs/NAME.* */
-    pid_t pid;
-    enum job_state state;
-    int resumed;                 /* row taken from an earlier results.csv */
-    int cont;                    /* continue its interrupted run (--resume --frames) */
-    char **row;                  /* N_COLS fields, or NULL */
-    unsigned long long sum;      /* of the fabric file's text (0: unreadable) */
-} job;
-
-typedef struct batch {
-    const char *scene;
-    const char *dir;
-    const char *pass[48];        /* options passed on to `drape run` (name, value) */
-    int npass;
-    int frames, progress;
-    job *jobs;
-    int n;
-    char ***extra;               /* earlier rows of fabrics not given now */
-    int n_extra;
-    /* DIR/inputs.sum as read by --resume: the fabric files' sums when
-     * their rows were made (fabric_file as in results.csv) */
-    char **old_file;
-    unsigned long long *old_sum;
-    int n_old;
-    int n_done, n_bad, n_running;
-    char results[BATCH_PATH_MAX];
-} batch;
-
 static volatile sig_atomic_t got_sigint, got_sigterm;
 
 static void on_signal(int sig)
@@ -137,64 +87,6 @@ static void on_signal(int sig)
     if (sig == SIGINT) got_sigint++;
     else got_sigterm = 1;
 }
-
-/* ---- rows ------------------------------------------------------------------ */
-
-static int col_of(const char *key)
-{
-    if (strcmp(key, "fabric_file") == 0) return COL_FILE;
-    if (strcmp(key, "error") == 0) return COL_ERROR;
-    for (int i = 0; i < N_RUN_KEYS; i++)
-        if (strcmp(key, run_keys[i]) == 0) return i + 1;
-    return -1;
-}
-
-static void row_free(char **row)
-{
-    if (!row) return;
-    for (int i = 0; i < N_COLS; i++) drape_free(row[i]);
-    drape_free(row);
-}
-
-static char **row_new(void)
-{
-    return drape_calloc(N_COLS, sizeof(char *));
-}
-
-/* Set a field (copy); line breaks become spaces so that every row is one
- * line (scripts/slurm/submit.sh merges row files line by line). */
-static int row_set(char **row, int col, const char *s)
-{
-    char *t = drape_strdup(s ? s : "");
-    if (!t) return -1;
-    for (char *c = t; *c; c++)
-        if (*c == '\n' || *c == '\r') *c = ' ';
-    drape_free(row[col]);
-    row[col] = t;
-    return 0;
-}
-
-static const char *row_status(char **row)
-{
-    const char *s = row ? row[col_of("status")] : NULL;
-    return s ? s : "";
-}
-
-/* A row is done (not run again by --resume) when the run produced a
- * result: equilibrium, t_max or failed (a numerical failure is
- * deterministic).  `error` rows (invalid input, I/O, crash) are run again. */
-static int status_done(const char *s)
-{
-    return strcmp(s, "equilibrium") == 0 || strcmp(s, "t_max") == 0 ||
-           strcmp(s, "failed") == 0;
-}
-
-static int status_ok(const char *s)
-{
-    return strcmp(s, "equilibrium") == 0 || strcmp(s, "t_max") == 0;
-}
-
-/* ---- files ----------------------------------------------------------------- */
 
 static int mkdir_p(const char *dir, drape_error *err)
 {
@@ -217,292 +109,6 @@ static int mkdir_p(const char *dir, drape_error *err)
         if (!keep) break;
     }
     return 0;
-}
-
-/* FNV-1a (64 bits) of a file's bytes: whether an input changed since a
- * row was made, not a digest against tampering.  0 if it cannot be read
- * (the run then reports the error itself). */
-static unsigned long long file_sum(const char *given)
-{
-    char path[4096];
-    drape_error e;
-    drape_error_clear(&e);
-    if (drape_cli_data_find(given, path, sizeof path, &e) != 0) return 0;
-    size_t len = 0;
-    char *text = drape_cli_read_file(path, DRAPE_YDOC_MAX_BYTES, &len, &e);
-    if (!text) return 0;
-    unsigned long long h = 14695981039346656037ULL;
-    for (size_t i = 0; i < len; i++) {
-        h ^= (unsigned char)text[i];
-        h *= 1099511628211ULL;
-    }
-    drape_free(text);
-    return h ? h : 1;
-}
-
-/* the sum recorded for a row's fabric_file (0: none recorded) */
-static unsigned long long old_sum_of(const batch *b, const char *field)
-{
-    for (int i = 0; i < b->n_old; i++)
-        if (strcmp(b->old_file[i], field) == 0) return b->old_sum[i];
-    return 0;
-}
-
-/* DIR/inputs.sum: "SUM<TAB>fabric_file" for every row, so that --resume
- * can tell a fabric file edited since its row was made */
-static int write_sums(const batch *b, drape_error *err)
-{
-    char path[BATCH_PATH_MAX + 16];
-    snprintf(path, sizeof path, "%s/inputs.sum", b->dir);
-    drape_cli_afile a;
-    if (drape_cli_afile_open(&a, path, err) != 0) return -1;
-    for (int k = 0; k < b->n + b->n_extra; k++) {
-        char **row = k < b->n ? b->jobs[k].row : b->extra[k - b->n];
-        if (!row) continue;
-        unsigned long long h = k < b->n ? b->jobs[k].sum : old_sum_of(b, row[COL_FILE]);
-        if (h) fprintf(a.f, "%016llx\t%s\n", h, row[COL_FILE]);
-    }
-    return drape_cli_afile_commit(&a, err);
-}
-
-static int read_sums(batch *b, drape_error *err)
-{
-    char path[BATCH_PATH_MAX + 16];
-    snprintf(path, sizeof path, "%s/inputs.sum", b->dir);
-    if (access(path, F_OK) != 0) return 0; /* a batch made before it */
-    char *text = drape_cli_read_file(path, BATCH_MAX_RESULTS, NULL, err);
-    if (!text) return -1;
-    int rc = 0;
-    for (char *line = text, *next; line && *line; line = next) {
-        next = strchr(line, '\n');
-        if (next) *next++ = 0;
-        char *tab = strchr(line, '\t');
-        if (!tab) continue;
-        *tab = 0;
-        char **nf = drape_realloc(b->old_file, (size_t)(b->n_old + 1) * sizeof *nf);
-        unsigned long long *ns = nf ? drape_realloc(b->old_sum, (size_t)(b->n_old + 1) * sizeof *ns)
-                                    : NULL;
-        if (nf) b->old_file = nf;
-        if (ns) b->old_sum = ns;
-        if (!nf || !ns || !(b->old_file[b->n_old] = drape_strdup(tab + 1))) {
-            rc = drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
-            break;
-        }
-        b->old_sum[b->n_old++] = strtoull(line, NULL, 16);
-    }
-    drape_free(text);
-    return rc;
-}
-
-static int write_results(const batch *b, drape_error *err)
-{
-    drape_cli_afile a;
-    if (drape_cli_afile_open(&a, b->results, err) != 0) return -1;
-    fputs("fabric_file", a.f);
-    for (int i = 0; i < N_RUN_KEYS; i++) fprintf(a.f, ",%s", run_keys[i]);
-    fputs(",error\n", a.f);
-    for (int k = 0; k < b->n + b->n_extra; k++) {
-        char **row = k < b->n ? b->jobs[k].row : b->extra[k - b->n];
-        if (!row) continue;
-        for (int i = 0; i < N_COLS; i++) {
-            if (i) fputc(',', a.f);
-            drape_cli_csv_put(a.f, row[i]);
-        }
-        fputc('\n', a.f);
-    }
-    if (drape_cli_afile_commit(&a, err) != 0) return -1;
-    return write_sums(b, err);
-}
-
-static int cmp_str(const void *a, const void *b)
-{
-    return strcmp(*(const char *const *)a, *(const char *const *)b);
-}
-
-/* 1 if texts x and y hold the same lines in any order, leaving out those
- * that start with skip (NULL: none). */
-static int same_lines(const char *x, const char *y, const char *skip)
-{
-    enum { MAXL = 128 };
-    char *t[2] = {drape_strdup(x), drape_strdup(y)}, *l[2][MAXL];
-    int n[2] = {0, 0}, same = t[0] && t[1];
-    for (int s = 0; s < 2 && same; s++) {
-        for (char *p = t[s], *q; p && *p; p = q) {
-            q = strchr(p, '\n');
-            if (q) *q++ = 0;
-            if (skip && strncmp(p, skip, strlen(skip)) == 0) continue;
-            if (n[s] == MAXL) { same = 0; break; }
-            l[s][n[s]++] = p;
-        }
-        qsort(l[s], (size_t)n[s], sizeof l[s][0], cmp_str);
-    }
-    same = same && n[0] == n[1];
-    for (int i = 0; same && i < n[0]; i++) same = strcmp(l[0][i], l[1][i]) == 0;
-    drape_free(t[0]);
-    drape_free(t[1]);
-    return same;
-}
-
-/* DIR/batch.args records the scene and the options passed to the runs;
- * --resume refuses a directory made with other ones. */
-static int check_args_stamp(const batch *b, int resume, drape_error *err)
-{
-    char path[BATCH_PATH_MAX], *want = NULL, *have = NULL;
-    size_t wn = 0;
-    int rc = -1;
-    FILE *m = open_memstream(&want, &wn);
-    if (!m) return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
-    fprintf(m, "scene %s\n", b->scene);
-    for (int i = 0; i + 1 < b->npass; i += 2) fprintf(m, "%s %s\n", b->pass[i], b->pass[i + 1]);
-    if (b->frames) fputs("--frames\n", m);
-    fprintf(m, "scene-sum %016llx\n", file_sum(b->scene));
-    if (fclose(m) != 0) {
-        free(want);
-        return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
-    }
-    snprintf(path, sizeof path, "%s/batch.args", b->dir);
-    if (resume && access(path, F_OK) == 0) {
-        if (!(have = drape_cli_read_file(path, 1 << 20, NULL, err))) goto out;
-        /* the same lines in any order: `--seed 3 --spacing 5mm` is the
-         * batch of `--spacing 5mm --seed 3` (each option occurs once) */
-        int same = same_lines(have, want, NULL);
-        int same_but_sum = !same && same_lines(have, want, "scene-sum ");
-        int have_sum = strncmp(have, "scene-sum ", 10) == 0 || strstr(have, "\nscene-sum ");
-        if (same || (same_but_sum && !have_sum)) { /* (or made before scene-sum) */
-            rc = 0;
-            goto out;
-        }
-        if (same_but_sum) {
-            drape_error_set(err, DRAPE_E_USAGE, path, 0, 0, NULL,
-                            "--resume: the scene file %s changed since this batch "
-                            "started (its scene-sum differs): rows made with the old "
-                            "and the new scene would be mixed; use another --out",
-                            b->scene);
-            goto out;
-        }
-        {
-            drape_error_set(err, DRAPE_E_USAGE, path, 0, 0, NULL,
-                            "--resume: this batch was started with another scene "
-                            "or other options; use the same ones (listed in this "
-                            "file), or another --out");
-            goto out;
-        }
-        rc = 0;
-        goto out;
-    }
-    drape_cli_afile a;
-    if (drape_cli_afile_open(&a, path, err) != 0) goto out;
-    fputs(want, a.f);
-    rc = drape_cli_afile_commit(&a, err);
-out:
-    free(want); /* from open_memstream */
-    drape_free(have);
-    return rc;
-}
-
-/* fabric_file as row_set stored it (line breaks as spaces) */
-static int same_file_field(const char *fabric, const char *field)
-{
-    for (; *fabric && *field; fabric++, field++) {
-        char c = *fabric == '\n' || *fabric == '\r' ? ' ' : *fabric;
-        if (c != *field) return 0;
-    }
-    return *fabric == *field;
-}
-
-/* --resume: read DIR/results.csv; keep done rows of given fabrics and every
- * row of fabrics not given now. */
-static int load_previous(batch *b, drape_error *err)
-{
-    struct stat st;
-    if (stat(b->results, &st) != 0 && errno == ENOENT) return 0;
-    size_t len;
-    char *text = drape_cli_read_file(b->results, BATCH_MAX_RESULTS, &len, err);
-    if (!text) return -1;
-    drape_cli_csv_pos p = {0, 0, 0};
-    drape_cli_csv_rec hdr = {0, NULL, NULL, 0}, r = {0, NULL, NULL, 0};
-    int *map = NULL, rc = -1, got;
-    char **row = NULL;
-    if ((got = drape_cli_csv_next(text, len, &p, &hdr, b->results, err)) < 0) goto out;
-    if (got == 0 || hdr.n < 1 || strcmp(hdr.field[0], "fabric_file") != 0) {
-        drape_error_set(err, DRAPE_E_INPUT, b->results, 1, 1, NULL,
-                        "--resume: not a results file of drape batch (the "
-                        "first column must be fabric_file)");
-        goto out;
-    }
-    if (!(map = drape_calloc((size_t)hdr.n, sizeof *map))) goto nomem;
-    int have_status = 0;
-    for (int i = 0; i < hdr.n; i++) {
-        map[i] = col_of(hdr.field[i]);
-        have_status |= map[i] == col_of("status");
-    }
-    if (!have_status) {
-        drape_error_set(err, DRAPE_E_INPUT, b->results, 1, 1, NULL,
-                        "--resume: no status column");
-        goto out;
-    }
-    while ((got = drape_cli_csv_next(text, len, &p, &r, b->results, err)) == 1) {
-        if (r.n == 1 && r.field[0][0] == 0) { /* blank line */
-            drape_cli_csv_rec_free(&r);
-            continue;
-        }
-        if (r.n != hdr.n) {
-            drape_error_set(err, DRAPE_E_INPUT, b->results, r.line, 1, NULL,
-                            "--resume: %d fields, the header has %d", r.n, hdr.n);
-            goto out;
-        }
-        if (!(row = row_new())) goto nomem;
-        for (int i = 0; i < r.n; i++)
-            if (map[i] >= 0 && row_set(row, map[i], r.field[i]) != 0) goto nomem;
-        for (int i = 0; i < N_COLS; i++)
-            if (!row[i] && row_set(row, i, "") != 0) goto nomem;
-        drape_cli_csv_rec_free(&r);
-        job *jb = NULL;
-        for (int k = 0; k < b->n && !jb; k++)
-            if (same_file_field(b->jobs[k].fabric, row[COL_FILE])) jb = &b->jobs[k];
-        /* the fabric file edited since this row was made (a sum is on
-         * record and differs): its row is run again, afresh */
-        unsigned long long was = jb ? old_sum_of(b, row[COL_FILE]) : 0;
-        int changed = jb && was && jb->sum && was != jb->sum;
-        if (changed)
-            fprintf(stderr, "drape: batch: %s changed since its row was made: run again\n",
-                    jb->fabric);
-        if (jb) {
-            if (b->frames && !changed && strcmp(row_status(row), "interrupted") == 0) jb->cont = 1;
-            if (!jb->row || (jb->state != JOB_DONE && status_done(row_status(row)))) {
-                /* a done row: kept; another (error, interrupted) or one of
-                 * a changed file: kept in results.csv until the fabric's
-                 * new run replaces it */
-                row_free(jb->row);
-                jb->row = row;
-                if (status_done(row_status(row)) && !changed) {
-                    jb->state = JOB_DONE;
-                    jb->resumed = 1;
-                }
-                row = NULL;
-            }
-        } else {
-            char ***ne = drape_realloc(b->extra, (size_t)(b->n_extra + 1) * sizeof *ne);
-            if (!ne) goto nomem;
-            b->extra = ne;
-            b->extra[b->n_extra++] = row;
-            row = NULL;
-        }
-        row_free(row);
-        row = NULL;
-    }
-    if (got < 0) goto out;
-    rc = 0;
-    goto out;
-nomem:
-    drape_error_set(err, DRAPE_E_NOMEM, b->results, 0, 0, NULL, "out of memory");
-out:
-    row_free(row);
-    drape_cli_csv_rec_free(&r);
-    drape_cli_csv_rec_free(&hdr);
-    drape_free(map);
-    drape_free(text);
-    return rc;
 }
 
 /* ---- children ---------------------------------------------------------------- */
@@ -636,8 +242,8 @@ static int collect(batch *b, job *jb, int wstatus, drape_error *err)
     etext = drape_cli_read_file(err_path, BATCH_MAX_CHILD_OUT, NULL, &ign);
     last_error_line(etext, msg, sizeof msg);
 
-    row_free(jb->row);
-    if (!(jb->row = row_new())) goto nomem;
+    drape_cli_batch_row_free(jb->row);
+    if (!(jb->row = drape_cli_batch_row_new())) goto nomem;
     drape_error_clear(&ign);
     if (out && drape_cli_csv_next(out, olen, &p, &hdr, out_path, &ign) == 1 &&
         drape_cli_csv_next(out, olen, &p, &r, out_path, &ign) == 1) {
@@ -646,8 +252,8 @@ static int collect(batch *b, job *jb, int wstatus, drape_error *err)
     }
     if (have_row) {
         for (int i = 0; i < hdr.n; i++) {
-            int c = col_of(hdr.field[i]);
-            if (c > COL_FILE && c < COL_ERROR && row_set(jb->row, c, r.field[i]) != 0)
+            int c = drape_cli_batch_col(hdr.field[i]);
+            if (c > COL_FILE && c < COL_ERROR && drape_cli_batch_row_set(jb->row, c, r.field[i]) != 0)
                 goto nomem;
         }
     }
@@ -666,11 +272,11 @@ static int collect(batch *b, job *jb, int wstatus, drape_error *err)
         snprintf(full, sizeof full, "drape run printed no result row");
     else
         full[0] = 0;
-    if (row_set(jb->row, COL_FILE, jb->fabric) != 0) goto nomem;
-    if (row_set(jb->row, COL_ERROR, full) != 0) goto nomem;
-    if (!have_row && row_set(jb->row, col_of("status"), "error") != 0) goto nomem;
+    if (drape_cli_batch_row_set(jb->row, COL_FILE, jb->fabric) != 0) goto nomem;
+    if (drape_cli_batch_row_set(jb->row, COL_ERROR, full) != 0) goto nomem;
+    if (!have_row && drape_cli_batch_row_set(jb->row, drape_cli_batch_col("status"), "error") != 0) goto nomem;
     for (int i = 0; i < N_COLS; i++)
-        if (!jb->row[i] && row_set(jb->row, i, "") != 0) goto nomem;
+        if (!jb->row[i] && drape_cli_batch_row_set(jb->row, i, "") != 0) goto nomem;
     rc = 0;
     goto out;
 nomem:
@@ -1021,15 +627,15 @@ int drape_cli_batch(int argc, char **argv)
         drape_error_set(&err, DRAPE_E_IO, b.dir, 0, 0, NULL, "path too long");
         goto fail;
     }
-    for (int k = 0; k < b.n; k++) b.jobs[k].sum = file_sum(b.jobs[k].fabric);
-    if (check_args_stamp(&b, resume, &err) != 0) goto fail;
-    if (resume && (read_sums(&b, &err) != 0 || load_previous(&b, &err) != 0)) goto fail;
+    for (int k = 0; k < b.n; k++) b.jobs[k].sum = drape_cli_batch_file_sum(b.jobs[k].fabric);
+    if (drape_cli_batch_check_stamp(&b, resume, &err) != 0) goto fail;
+    if (resume && (drape_cli_batch_read_sums(&b, &err) != 0 || drape_cli_batch_load_previous(&b, &err) != 0)) goto fail;
     for (int k = 0; k < b.n; k++)
         if (b.jobs[k].state == JOB_DONE) {
             b.n_done++;
-            b.n_bad += !status_ok(row_status(b.jobs[k].row));
+            b.n_bad += !drape_cli_batch_status_ok(drape_cli_batch_row_status(b.jobs[k].row));
         }
-    if (write_results(&b, &err) != 0) goto fail; /* also: DIR is writable */
+    if (drape_cli_batch_write_results(&b, &err) != 0) goto fail; /* also: DIR is writable */
 
     /* SIGINT: stop launching, let the running fabrics finish; a second
      * SIGINT or a SIGTERM: stop them.  No SA_RESTART, so waitpid returns
@@ -1060,17 +666,17 @@ int drape_cli_batch(int argc, char **argv)
             drape_error_clear(&e2);
             if (launch(&b, jb, &e2) != 0) { /* fork failed: an error row */
                 char m[1024];
-                row_free(jb->row);
-                if (!(jb->row = row_new())) goto nomem;
-                if (row_set(jb->row, COL_FILE, jb->fabric) ||
-                    row_set(jb->row, col_of("status"), "error") ||
-                    row_set(jb->row, COL_ERROR, drape_error_format(&e2, m, sizeof m)))
+                drape_cli_batch_row_free(jb->row);
+                if (!(jb->row = drape_cli_batch_row_new())) goto nomem;
+                if (drape_cli_batch_row_set(jb->row, COL_FILE, jb->fabric) ||
+                    drape_cli_batch_row_set(jb->row, drape_cli_batch_col("status"), "error") ||
+                    drape_cli_batch_row_set(jb->row, COL_ERROR, drape_error_format(&e2, m, sizeof m)))
                     goto nomem;
                 for (int i = 0; i < N_COLS; i++)
-                    if (!jb->row[i] && row_set(jb->row, i, "")) goto nomem;
+                    if (!jb->row[i] && drape_cli_batch_row_set(jb->row, i, "")) goto nomem;
                 jb->state = JOB_DONE;
                 b.n_done++, b.n_bad++;
-                if (write_results(&b, &err) != 0) break;
+                if (drape_cli_batch_write_results(&b, &err) != 0) break;
             }
         }
         if (err.kind != DRAPE_OK) break;
@@ -1106,8 +712,8 @@ int drape_cli_batch(int argc, char **argv)
         if (collect(&b, jb, ws, &err) != 0) break;
         jb->state = JOB_DONE;
         b.n_done++;
-        b.n_bad += !status_ok(row_status(jb->row));
-        if (write_results(&b, &err) != 0) break;
+        b.n_bad += !drape_cli_batch_status_ok(drape_cli_batch_row_status(jb->row));
+        if (drape_cli_batch_write_results(&b, &err) != 0) break;
     }
     progress(&b, 1);
     if (err.kind != DRAPE_OK) {
@@ -1132,12 +738,7 @@ out:
         sigaction(SIGINT, &sa_old_int, NULL);
         sigaction(SIGTERM, &sa_old_term, NULL);
     }
-    for (int k = 0; k < b.n; k++) row_free(b.jobs[k].row);
-    for (int k = 0; k < b.n_extra; k++) row_free(b.extra[k]);
-    drape_free(b.extra);
-    for (int k = 0; k < b.n_old; k++) drape_free(b.old_file[k]);
-    drape_free(b.old_file);
-    drape_free(b.old_sum);
+    drape_cli_batch_free_record(&b);
     drape_free(b.jobs);
     return status;
 }
