@@ -24,6 +24,7 @@
 #include "cli_batch.h"
 #include "cli_data.h"
 #include "cli_io.h"
+#include "cli_run.h"
 #include "drape/alloc.h"
 #include "drape/fabric.h"
 #include "drape/integrator.h"
@@ -313,29 +314,6 @@ static int usage_error(const char *fmt, const char *a)
     return drape_error_exit_status(DRAPE_E_USAGE);
 }
 
-/* A quantity of dimension dim given to option opt: > 0 with positive,
- * >= 0 without (usage error otherwise). */
-static int check_quantity(const char *opt, const char *text, drape_dim dim, int positive,
-                          double *out)
-{
-    char why[256];
-    double v;
-    if (drape_units_parse(text, dim, &v, why, sizeof why) != 0) {
-        fprintf(stderr, "drape: batch: %s: %s\nTry `drape batch --help'.\n", opt, why);
-        return -1;
-    }
-    if (positive && !(v > 0)) {
-        fprintf(stderr, "drape: batch: %s: must be positive, got %s\n", opt, text);
-        return -1;
-    }
-    if (!(v >= 0)) {
-        fprintf(stderr, "drape: batch: %s: must not be negative, got %s\n", opt, text);
-        return -1;
-    }
-    if (out) *out = v;
-    return 0;
-}
-
 /* Unique, file-name-safe name from the fabric file name. */
 static void make_name(batch *b, int k)
 {
@@ -366,47 +344,38 @@ static void make_name(batch *b, int k)
 
 int drape_cli_batch(int argc, char **argv)
 {
-    enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_INTEGRATOR, O_RTOL, O_ATOL,
-           O_SPACING, O_FORM, O_TMAX, O_MAXSTEPS, O_STRAIN, O_METHOD, O_LINSOL,
-           O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_FALLSWING, O_TERMS,
-           O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD, O_FALLRETRY };
+    /* the options passed on to every run, checked as run checks them
+     * (drape_cli_run_option) */
+#define BATCH_PASSED(X)                                                                  \
+    X("integrator") X("rtol") X("atol") X("spacing") X("energy-form") X("t-max")         \
+    X("max-steps") X("strain-limit") X("method") X("linear-solver") X("max-order")       \
+    X("specimens") X("seed") X("fall-time") X("fall-step") X("fall-swing") X("fall-tol") \
+    X("fall-fold-time") X("fall-retry") X("damping-shear") X("terms")
+#define AS_OPTION(n) {n, required_argument, NULL, O_PASS},
+#define AS_NAME(n) "--" n,
+    enum { O_OUT = 1000, O_RESUME, O_FRAMES, O_PASS, N_OWN = 4 };
     static const struct option opts[] = {
         {"jobs", required_argument, NULL, 'j'},
         {"out", required_argument, NULL, O_OUT},
         {"resume", no_argument, NULL, O_RESUME},
         {"frames", no_argument, NULL, O_FRAMES},
-        {"integrator", required_argument, NULL, O_INTEGRATOR},
-        {"rtol", required_argument, NULL, O_RTOL},
-        {"atol", required_argument, NULL, O_ATOL},
-        {"spacing", required_argument, NULL, O_SPACING},
-        {"energy-form", required_argument, NULL, O_FORM},
-        {"t-max", required_argument, NULL, O_TMAX},
-        {"max-steps", required_argument, NULL, O_MAXSTEPS},
-        {"strain-limit", required_argument, NULL, O_STRAIN},
-        {"method", required_argument, NULL, O_METHOD},
-        {"linear-solver", required_argument, NULL, O_LINSOL},
-        {"max-order", required_argument, NULL, O_MAXORDER},
-        {"specimens", required_argument, NULL, O_SPECIMENS},
-        {"seed", required_argument, NULL, O_SEED},
-        {"fall-time", required_argument, NULL, O_FALLTIME},
-        {"fall-step", required_argument, NULL, O_FALLSTEP},
-        {"fall-swing", required_argument, NULL, O_FALLSWING},
-        {"fall-tol", required_argument, NULL, O_FALLTOL},
-        {"fall-fold-time", required_argument, NULL, O_FALLFOLD},
-        {"fall-retry", required_argument, NULL, O_FALLRETRY},
-        {"damping-shear", required_argument, NULL, O_DAMPSHEAR},
-        {"terms", required_argument, NULL, O_TERMS},
+        /* from here on (N_OWN) in the order of passed[] */
+        BATCH_PASSED(AS_OPTION)
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
+    static const char *const passed[] = {BATCH_PASSED(AS_NAME)};
+#undef AS_OPTION
+#undef AS_NAME
+#undef BATCH_PASSED
     batch b;
     memset(&b, 0, sizeof b);
     b.dir = BATCH_DEFAULT_DIR;
     long jobs = 1;
-    int resume = 0, quiet = 0, c;
-    double spacing = 0.0; /* --spacing, m: the scene is checked with it */
-    while ((c = getopt_long(argc, argv, "j:qh", opts, NULL)) != -1) {
-        const char *name = NULL;
+    int resume = 0, quiet = 0, c, li;
+    run_args ra; /* the passed-on options' values: the scene is checked with --spacing */
+    memset(&ra, 0, sizeof ra);
+    while ((c = getopt_long(argc, argv, "j:qh", opts, &li)) != -1) {
         switch (c) {
         case 'j': {
             char *end;
@@ -419,120 +388,23 @@ int drape_cli_batch(int argc, char **argv)
         case O_OUT: b.dir = optarg; break;
         case O_RESUME: resume = 1; break;
         case O_FRAMES: b.frames = 1; break;
-        case O_INTEGRATOR: {
-            int ok = 0;
-            for (int i = 0; drape_integrator_names[i]; i++)
-                ok |= strcmp(drape_integrator_names[i], optarg) == 0;
-            if (!ok) return usage_error("--integrator: unknown integrator `%s'; see `drape run --help'", optarg);
-            name = "--integrator";
-            break;
-        }
-        case O_RTOL: {
-            double v;
-            char why[256];
-            if (check_quantity("--rtol", optarg, DRAPE_DIM_NONE, 1, NULL)) return 2;
-            if (drape_units_parse(optarg, DRAPE_DIM_NONE, &v, why, sizeof why) == 0 && !(v < 1))
-                return usage_error("--rtol: must be in (0, 1), got %s", optarg);
-            name = "--rtol";
-            break;
-        }
-        case O_ATOL:
-            if (check_quantity("--atol", optarg, DRAPE_DIM_LENGTH, 1, NULL)) return 2;
-            name = "--atol";
-            break;
-        case O_SPACING:
-            if (check_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, 1, &spacing)) return 2;
-            name = "--spacing";
-            break;
-        case O_FORM:
-            if (strcmp(optarg, "consistent") && strcmp(optarg, "seed"))
-                return usage_error("--energy-form: expected consistent or seed, got `%s'", optarg);
-            name = "--energy-form";
-            break;
-        case O_TMAX:
-            if (check_quantity("--t-max", optarg, DRAPE_DIM_TIME, 1, NULL)) return 2;
-            name = "--t-max";
-            break;
-        case O_STRAIN:
-            if (check_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, 1, NULL)) return 2;
-            name = "--strain-limit";
-            break;
-        case O_METHOD:
-            if (strcmp(optarg, "dynamic") && strcmp(optarg, "static") && strcmp(optarg, "fall"))
-                return usage_error("--method: expected fall, dynamic or static, got `%s'", optarg);
-            name = "--method";
-            break;
-        case O_FALLTIME:
-        case O_FALLSTEP:
-            name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
-            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 1, NULL)) return 2;
-            break;
-        case O_FALLTOL:
-            name = "--fall-tol";
-            if (check_quantity(name, optarg, DRAPE_DIM_LENGTH, 0, NULL)) return 2;
-            break;
-        case O_FALLFOLD:
-        case O_FALLRETRY:
-            name = c == O_FALLFOLD ? "--fall-fold-time" : "--fall-retry";
-            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0, NULL)) return 2;
-            break;
-        case O_DAMPSHEAR:
-            name = "--damping-shear";
-            if (check_quantity(name, optarg, DRAPE_DIM_TIME, 0, NULL)) return 2;
-            break;
-        case O_FALLSWING: {
-            char *end;
-            double v = strtod(optarg, &end);
-            if (*end || end == optarg || !(v >= 0.0 && v < 1.0))
-                return usage_error("--fall-swing: expected a fraction in [0, 1), got `%s'", optarg);
-            name = "--fall-swing";
-            break;
-        }
-        case O_TERMS: {
-            unsigned t;
-            if (drape_scene_terms_parse(optarg, &t) != 0)
-                return usage_error("--terms: expected a comma-separated list of stretch, "
-                                   "bend, shear, gravity, bias, got `%s'", optarg);
-            name = "--terms";
-            break;
-        }
-        case O_SPECIMENS:
-        case O_SEED: {
-            char *end;
-            errno = 0;
-            long long v = strtoll(optarg, &end, 10);
-            name = c == O_SPECIMENS ? "--specimens" : "--seed";
-            if (errno || *end || end == optarg || v < (c == O_SPECIMENS ? 1 : 0) ||
-                (c == O_SPECIMENS && v > DRAPE_SCENE_SPECIMENS_MAX) ||
-                (unsigned long long)v > DRAPE_SCENE_SEED_MAX)
-                return usage_error(c == O_SPECIMENS
-                                       ? "--specimens: expected an integer from 1 to 1000, got `%s'"
-                                       : "--seed: expected a non-negative integer up to "
-                                         DRAPE_SCENE_SEED_MAX_TEXT ", got `%s'",
-                                   optarg);
-            break;
-        }
-        case O_LINSOL: {
-            int ls;
-            if (drape_linsol_parse(optarg, &ls) != 0)
-                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'", optarg);
-            name = "--linear-solver";
-            break;
-        }
-        case O_MAXSTEPS: {
-            char *end;
-            errno = 0;
-            long v = strtol(optarg, &end, 10);
-            if (errno || *end || end == optarg || v <= 0)
-                return usage_error("--max-steps: expected a positive integer, got `%s'", optarg);
-            name = "--max-steps";
-            break;
-        }
-        case O_MAXORDER: {
-            int v;
-            if (drape_max_order_parse(optarg, &v) != 0)
-                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'", optarg);
-            name = "--max-order";
+        case O_PASS: {
+            const char *name = passed[li - N_OWN];
+            char why[512];
+            if (drape_cli_run_option(&ra, name, optarg, why, sizeof why) != 0)
+                return usage_error("%s", why);
+            if (ra.method == DRAPE_METHOD_ANIMATE)
+                return usage_error("%s", "--method animate: not in a batch (it writes a "
+                                         "renderer's frames: `drape run --method animate "
+                                         "--out DIR`)");
+            int dup = -1;
+            for (int i = 0; i < b.npass; i += 2)
+                if (b.pass[i] == name) dup = i;
+            if (dup >= 0) b.pass[dup + 1] = optarg; /* last one wins, as in run */
+            else {
+                b.pass[b.npass++] = name;
+                b.pass[b.npass++] = optarg;
+            }
             break;
         }
         case 'q': quiet = 1; break;
@@ -540,16 +412,6 @@ int drape_cli_batch(int argc, char **argv)
         default:
             fputs("Try `drape batch --help'.\n", stderr);
             return drape_error_exit_status(DRAPE_E_USAGE);
-        }
-        if (name) {
-            int dup = -1;
-            for (int i = 0; i < b.npass; i += 2)
-                if (strcmp(b.pass[i], name) == 0) dup = i;
-            if (dup >= 0) b.pass[dup + 1] = optarg; /* last one wins, as in run */
-            else {
-                b.pass[b.npass++] = name;
-                b.pass[b.npass++] = optarg;
-            }
         }
     }
     if (argc - optind < 2)
@@ -584,8 +446,8 @@ int drape_cli_batch(int argc, char **argv)
     /* strict: the scene's own fabric must exist too (a scene file with a
      * dangling fabric is bad input for check, run and batch alike, issue 7) */
     if (drape_scene_load(b.scene, &s, &err, NULL, NULL) != 0) goto fail;
-    if (spacing > 0.0) { /* as each run applies it */
-        s.spacing = spacing;
+    if (ra.spacing > 0.0) { /* as each run applies it */
+        s.spacing = ra.spacing;
         s.at_spacing.line = DRAPE_SCENE_POS_COMMAND_LINE;
     }
     for (int i = optind + 1; i < argc; i++) {

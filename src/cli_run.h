@@ -39,6 +39,14 @@ typedef struct run_args {
                                  it starts its specimens) */
 } run_args;
 
+/* Set the value of one of `drape run`'s options in ra, checked as run
+ * checks it: name with its dashes ("--rtol"), text as given (units
+ * allowed where the option takes a quantity).  Every option but --fabric,
+ * --out, --resume, --format, -j, -q and -h; `drape batch` checks the
+ * options it passes on to its runs with it.  0, or -1 with why set
+ * ("--rtol: must be in (0, 1), got 2"). */
+int drape_cli_run_option(run_args *ra, const char *name, const char *text, char *why, size_t n);
+
 /* In an ensemble's child process: where the result goes instead of stdout
  * (drape_cli_result_write lines and an "@shadow" line). */
 typedef struct run_child {

@@ -184,17 +184,6 @@ static int usage_error(const char *fmt, const char *a, const char *b)
     return drape_error_exit_status(DRAPE_E_USAGE);
 }
 
-static int parse_quantity(const char *opt, const char *text, drape_dim dim,
-                          double *v)
-{
-    char why[256];
-    if (drape_units_parse(text, dim, v, why, sizeof why) != 0) {
-        usage_error("%s: %s", opt, why);
-        return -1;
-    }
-    return 0;
-}
-
 /* A count from min to max ("-j 0" = one per core). */
 static int parse_count(const char *text, int min, int max, int *out)
 {
@@ -206,174 +195,195 @@ static int parse_count(const char *text, int min, int max, int *out)
     return 0;
 }
 
+/* A quantity of dimension dim (SI); why set if it does not parse. */
+static int quantity(const char *name, const char *text, drape_dim dim, double *v,
+                    char *why, size_t n)
+{
+    char w[256];
+    if (drape_units_parse(text, dim, v, w, sizeof w) == 0) return 0;
+    snprintf(why, n, "%s: %s", name, w);
+    return -1;
+}
+
+#define IS(opt) (strcmp(name, opt) == 0)
+#define WHY(...) (snprintf(why, n, __VA_ARGS__), -1)
+
+int drape_cli_run_option(run_args *ra, const char *name, const char *text, char *why, size_t n)
+{
+    double v;
+    if (IS("--integrator")) {
+        for (int i = 0; drape_integrator_names[i]; i++)
+            if (strcmp(drape_integrator_names[i], text) == 0) return ra->integrator = text, 0;
+        return WHY("--integrator: unknown integrator `%s'; see `drape run --help'", text);
+    }
+    if (IS("--energy-form")) {
+        if (strcmp(text, "consistent") && strcmp(text, "seed"))
+            return WHY("--energy-form: expected consistent or seed, got `%s'", text);
+        return ra->form = text, 0;
+    }
+    if (IS("--rtol")) {
+        if (quantity(name, text, DRAPE_DIM_NONE, &v, why, n)) return -1;
+        if (!(v > 0 && v < 1)) return WHY("--rtol: must be in (0, 1), got %s", text);
+        return ra->rtol = v, 0;
+    }
+    if (IS("--atol") || IS("--spacing")) {
+        if (quantity(name, text, DRAPE_DIM_LENGTH, &v, why, n)) return -1;
+        if (!(v > 0)) return WHY("%s: must be positive, got %s", name, text);
+        *(IS("--atol") ? &ra->atol : &ra->spacing) = v;
+        return 0;
+    }
+    if (IS("--t-max") || IS("--fall-time") || IS("--fall-step")) {
+        if (quantity(name, text, DRAPE_DIM_TIME, &v, why, n)) return -1;
+        if (!(v > 0)) return WHY("%s: must be positive, got %s", name, text);
+        *(IS("--t-max") ? &ra->t_max : IS("--fall-time") ? &ra->fall_time : &ra->fall_step) = v;
+        return 0;
+    }
+    if (IS("--strain-limit")) {
+        if (quantity(name, text, DRAPE_DIM_NONE, &v, why, n)) return -1;
+        if (!(v > 0) || !isfinite(v))
+            return WHY("--strain-limit: must be a positive number, got %s", text);
+        return ra->strain_limit = v, 0;
+    }
+    if (IS("--fall-tol")) {
+        if (quantity(name, text, DRAPE_DIM_LENGTH, &v, why, n)) return -1;
+        if (!(v >= 0)) return WHY("--fall-tol: must not be negative, got %s", text);
+        return ra->fall_tol = v, 0;
+    }
+    if (IS("--fall-fold-time") || IS("--fall-retry") || IS("--damping-shear")) {
+        if (quantity(name, text, DRAPE_DIM_TIME, &v, why, n)) return -1;
+        if (!(v >= 0) || !isfinite(v)) return WHY("%s: must be a time >= 0, got %s", name, text);
+        *(IS("--fall-fold-time") ? &ra->fall_fold_time
+          : IS("--fall-retry")   ? &ra->fall_retry
+                                 : &ra->damping_shear) = v;
+        return 0;
+    }
+    if (IS("--fall-swing")) {
+        char *end;
+        v = strtod(text, &end);
+        if (*end || end == text || !(v >= 0.0 && v < 1.0))
+            return WHY("--fall-swing: expected a fraction in [0, 1), got `%s'", text);
+        return ra->fall_swing = v, 0;
+    }
+    if (IS("--method")) {
+        for (int k = 1; drape_method_names[k]; k++)
+            if (strcmp(text, drape_method_names[k]) == 0) return ra->method = k, 0;
+        return WHY("--method: expected fall, dynamic, static or animate, got `%s'", text);
+    }
+    if (IS("--linear-solver")) {
+        if (drape_linsol_parse(text, &ra->linsol) != 0)
+            return WHY("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'", text);
+        return 0;
+    }
+    if (IS("--terms")) {
+        if (drape_scene_terms_parse(text, &ra->terms) != 0)
+            return WHY("--terms: expected a comma-separated list of stretch, bend, "
+                       "shear, gravity, bias, got `%s'", text);
+        return 0;
+    }
+    if (IS("--max-order")) {
+        if (drape_max_order_parse(text, &ra->max_order) != 0)
+            return WHY("--max-order: expected an integer from 1 to 5, got `%s'", text);
+        return 0;
+    }
+    if (IS("--max-steps")) {
+        char *end;
+        errno = 0;
+        long m = strtol(text, &end, 10);
+        if (errno || *end || end == text || m <= 0)
+            return WHY("--max-steps: expected a positive integer, got `%s'", text);
+        return ra->max_steps = m, 0;
+    }
+    if (IS("--specimens")) {
+        if (parse_count(text, 1, DRAPE_SCENE_SPECIMENS_MAX, &ra->specimens) != 0)
+            return WHY("--specimens: expected an integer from 1 to %s, got `%s'",
+                       DRAPE_SCENE_SPECIMENS_MAX_TEXT, text);
+        return 0;
+    }
+    if (IS("--substeps")) {
+        if (parse_count(text, 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &ra->substeps) != 0)
+            return WHY("--substeps: expected an integer from 1 to %d, got `%s'",
+                       DRAPE_ANIMATE_SUBSTEPS_MAX, text);
+        return 0;
+    }
+    if (IS("--seed")) {
+        char *end;
+        errno = 0;
+        unsigned long u = strtoul(text, &end, 10);
+        if (errno || *end || text[0] == '-' || text[0] == 0 || u > DRAPE_SCENE_SEED_MAX)
+            return WHY("--seed: expected a non-negative integer up to "
+                       DRAPE_SCENE_SEED_MAX_TEXT ", got `%s'", text);
+        ra->has_seed = 1;
+        ra->seed = u;
+        return 0;
+    }
+    return WHY("%s: not an option of drape run", name);
+}
+
+#undef IS
+#undef WHY
+
 int drape_cli_run(int argc, char **argv)
 {
-    enum { O_FABRIC = 1000, O_INTEGRATOR, O_RTOL, O_ATOL, O_SPACING, O_FORM,
-           O_TMAX, O_OUT, O_FORMAT, O_MAXSTEPS, O_METHOD, O_LINSOL, O_RESUME,
-           O_STRAIN, O_MAXORDER, O_SPECIMENS, O_SEED, O_FALLTIME, O_FALLSTEP, O_SUBSTEPS,
-           O_TERMS, O_FALLSWING, O_FALLTOL, O_DAMPSHEAR, O_FALLFOLD, O_FALLRETRY };
+    /* the options that set a value of the run: drape_cli_run_option */
+    enum { O_FABRIC = 1000, O_OUT, O_FORMAT, O_RESUME, O_VALUE };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
-        {"integrator", required_argument, NULL, O_INTEGRATOR},
-        {"rtol", required_argument, NULL, O_RTOL},
-        {"atol", required_argument, NULL, O_ATOL},
-        {"spacing", required_argument, NULL, O_SPACING},
-        {"energy-form", required_argument, NULL, O_FORM},
-        {"t-max", required_argument, NULL, O_TMAX},
+        {"integrator", required_argument, NULL, O_VALUE},
+        {"rtol", required_argument, NULL, O_VALUE},
+        {"atol", required_argument, NULL, O_VALUE},
+        {"spacing", required_argument, NULL, O_VALUE},
+        {"energy-form", required_argument, NULL, O_VALUE},
+        {"t-max", required_argument, NULL, O_VALUE},
         {"out", required_argument, NULL, O_OUT},
-        {"max-steps", required_argument, NULL, O_MAXSTEPS},
-        {"max-order", required_argument, NULL, O_MAXORDER},
-        {"method", required_argument, NULL, O_METHOD},
-        {"linear-solver", required_argument, NULL, O_LINSOL},
-        {"strain-limit", required_argument, NULL, O_STRAIN},
+        {"max-steps", required_argument, NULL, O_VALUE},
+        {"max-order", required_argument, NULL, O_VALUE},
+        {"method", required_argument, NULL, O_VALUE},
+        {"linear-solver", required_argument, NULL, O_VALUE},
+        {"strain-limit", required_argument, NULL, O_VALUE},
         {"resume", required_argument, NULL, O_RESUME},
-        {"specimens", required_argument, NULL, O_SPECIMENS},
+        {"specimens", required_argument, NULL, O_VALUE},
         {"jobs", required_argument, NULL, 'j'},
-        {"seed", required_argument, NULL, O_SEED},
-        {"terms", required_argument, NULL, O_TERMS},
-        {"fall-swing", required_argument, NULL, O_FALLSWING},
-        {"fall-tol", required_argument, NULL, O_FALLTOL},
-        {"fall-fold-time", required_argument, NULL, O_FALLFOLD},
-        {"fall-retry", required_argument, NULL, O_FALLRETRY},
-        {"damping-shear", required_argument, NULL, O_DAMPSHEAR},
-        {"fall-time", required_argument, NULL, O_FALLTIME},
-        {"fall-step", required_argument, NULL, O_FALLSTEP},
-        {"substeps", required_argument, NULL, O_SUBSTEPS},
+        {"seed", required_argument, NULL, O_VALUE},
+        {"terms", required_argument, NULL, O_VALUE},
+        {"fall-swing", required_argument, NULL, O_VALUE},
+        {"fall-tol", required_argument, NULL, O_VALUE},
+        {"fall-fold-time", required_argument, NULL, O_VALUE},
+        {"fall-retry", required_argument, NULL, O_VALUE},
+        {"damping-shear", required_argument, NULL, O_VALUE},
+        {"fall-time", required_argument, NULL, O_VALUE},
+        {"fall-step", required_argument, NULL, O_VALUE},
+        {"substeps", required_argument, NULL, O_VALUE},
         {"format", required_argument, NULL, O_FORMAT},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
-    const char *fabric_path = NULL, *integrator = NULL, *form = NULL, *out_dir = NULL;
-    const char *resume_dir = NULL, *run_opt = NULL;
-    double rtol = 0, atol = 0, spacing = 0, t_max = 0, strain_limit = 0;
-    int csv = 0, quiet = 0, c;
-    long max_steps = 0;
-    int max_order = 0;
-    int method = DRAPE_METHOD_DEFAULT, linsol = 0;
+    const char *fabric_path = NULL, *out_dir = NULL, *resume_dir = NULL, *run_opt = NULL;
+    int csv = 0, quiet = 0, c, li;
     run_args ra;
     memset(&ra, 0, sizeof ra);
+    ra.method = DRAPE_METHOD_DEFAULT;
     ra.fall_swing = -1.0;
     ra.fall_tol = -1.0;
     ra.fall_fold_time = -1.0;
     ra.fall_retry = -1.0;
     ra.damping_shear = -1.0;
     ra.jobs = 0; /* one per core */
-    while ((c = getopt_long(argc, argv, "qhj:", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "qhj:", opts, &li)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;
-        case O_INTEGRATOR: integrator = optarg; break;
-        case O_RTOL:
-            if (parse_quantity("--rtol", optarg, DRAPE_DIM_NONE, &rtol)) return 2;
-            if (!(rtol > 0 && rtol < 1)) return usage_error("--rtol: must be in (0, 1), got %s%s", optarg, "");
-            break;
-        case O_ATOL:
-            if (parse_quantity("--atol", optarg, DRAPE_DIM_LENGTH, &atol)) return 2;
-            if (!(atol > 0)) return usage_error("--atol: must be positive, got %s%s", optarg, "");
-            break;
-        case O_SPACING:
-            if (parse_quantity("--spacing", optarg, DRAPE_DIM_LENGTH, &spacing)) return 2;
-            if (!(spacing > 0)) return usage_error("--spacing: must be positive, got %s%s", optarg, "");
-            break;
-        case O_FORM: form = optarg; break;
-        case O_TMAX:
-            if (parse_quantity("--t-max", optarg, DRAPE_DIM_TIME, &t_max)) return 2;
-            if (!(t_max > 0)) return usage_error("--t-max: must be positive, got %s%s", optarg, "");
-            break;
-        case O_STRAIN:
-            if (parse_quantity("--strain-limit", optarg, DRAPE_DIM_NONE, &strain_limit)) return 2;
-            if (!(strain_limit > 0) || !isfinite(strain_limit))
-                return usage_error("--strain-limit: must be a positive number, got %s%s", optarg, "");
-            break;
         case O_OUT: out_dir = optarg; break;
         case O_RESUME: resume_dir = optarg; break;
-        case O_LINSOL:
-            if (drape_linsol_parse(optarg, &linsol) != 0)
-                return usage_error("--linear-solver: expected auto, klu, schur or schur-direct, got `%s'%s", optarg, "");
+        case O_VALUE: {
+            char name[32], why[512];
+            snprintf(name, sizeof name, "--%s", opts[li].name);
+            if (drape_cli_run_option(&ra, name, optarg, why, sizeof why) != 0)
+                return usage_error("%s%s", why, "");
             break;
-        case O_METHOD:
-            method = DRAPE_METHOD_DEFAULT;
-            for (int k = 1; drape_method_names[k]; k++)
-                if (strcmp(optarg, drape_method_names[k]) == 0) method = k;
-            if (method == DRAPE_METHOD_DEFAULT)
-                return usage_error("--method: expected fall, dynamic, static or animate, got `%s'%s", optarg, "");
-            break;
-        case O_SPECIMENS:
-            if (parse_count(optarg, 1, DRAPE_SCENE_SPECIMENS_MAX, &ra.specimens) != 0)
-                return usage_error("--specimens: expected an integer from 1 to %s, got `%s'",
-                                   DRAPE_SCENE_SPECIMENS_MAX_TEXT, optarg);
-            break;
+        }
         case 'j':
             if (parse_count(optarg, 0, 4096, &ra.jobs) != 0)
                 return usage_error("-j: expected a number of processes from 0 (one per core) to %s, got `%s'",
                                    "4096", optarg);
-            break;
-        case O_SEED: {
-            char *end;
-            errno = 0;
-            unsigned long v = strtoul(optarg, &end, 10);
-            if (errno || *end || optarg[0] == '-' || optarg[0] == 0 || v > DRAPE_SCENE_SEED_MAX)
-                return usage_error("--seed: expected a non-negative integer up to "
-                                   DRAPE_SCENE_SEED_MAX_TEXT ", got `%s'%s", optarg, "");
-            ra.has_seed = 1;
-            ra.seed = v;
-            break;
-        }
-        case O_FALLSWING: {
-            char *end;
-            ra.fall_swing = strtod(optarg, &end);
-            if (*end || end == optarg || !(ra.fall_swing >= 0.0 && ra.fall_swing < 1.0))
-                return usage_error("--fall-swing: expected a fraction in [0, 1), got `%s'%s",
-                                   optarg, "");
-            break;
-        }
-        case O_TERMS:
-            if (drape_scene_terms_parse(optarg, &ra.terms) != 0)
-                return usage_error("--terms: expected a comma-separated list of stretch, bend, "
-                                   "shear, gravity, bias, got `%s'%s", optarg, "");
-            break;
-        case O_SUBSTEPS:
-            if (parse_count(optarg, 1, DRAPE_ANIMATE_SUBSTEPS_MAX, &ra.substeps) != 0)
-                return usage_error("--substeps: expected an integer from 1 to %s, got `%s'",
-                                   "10000", optarg);
-            break;
-        case O_FALLTOL:
-            if (parse_quantity("--fall-tol", optarg, DRAPE_DIM_LENGTH, &ra.fall_tol)) return 2;
-            if (!(ra.fall_tol >= 0))
-                return usage_error("--fall-tol: must not be negative, got %s%s", optarg, "");
-            break;
-        case O_FALLFOLD:
-        case O_FALLRETRY:
-        case O_DAMPSHEAR: { /* times >= 0 */
-            const char *name = c == O_FALLFOLD    ? "--fall-fold-time"
-                               : c == O_FALLRETRY ? "--fall-retry"
-                                                  : "--damping-shear";
-            double *v = c == O_FALLFOLD    ? &ra.fall_fold_time
-                        : c == O_FALLRETRY ? &ra.fall_retry
-                                           : &ra.damping_shear;
-            if (parse_quantity(name, optarg, DRAPE_DIM_TIME, v)) return 2;
-            if (!(*v >= 0) || !isfinite(*v))
-                return usage_error("%s: must be a time >= 0, got %s", name, optarg);
-            break;
-        }
-        case O_FALLTIME:
-        case O_FALLSTEP: {
-            const char *name = c == O_FALLTIME ? "--fall-time" : "--fall-step";
-            double *v = c == O_FALLTIME ? &ra.fall_time : &ra.fall_step;
-            if (parse_quantity(name, optarg, DRAPE_DIM_TIME, v)) return 2;
-            if (!(*v > 0)) return usage_error("%s: must be positive, got %s", name, optarg);
-            break;
-        }
-        case O_MAXSTEPS: {
-            char *end;
-            errno = 0;
-            max_steps = strtol(optarg, &end, 10);
-            if (errno || *end || max_steps <= 0)
-                return usage_error("--max-steps: expected a positive integer, got `%s'%s", optarg, "");
-            break;
-        }
-        case O_MAXORDER:
-            if (drape_max_order_parse(optarg, &max_order) != 0)
-                return usage_error("--max-order: expected an integer from 1 to 5, got `%s'%s", optarg, "");
             break;
         case O_FORMAT:
             if (strcmp(optarg, "json") == 0) csv = 0;
@@ -412,30 +422,10 @@ int drape_cli_run(int argc, char **argv)
         scene_path = scene_buf;
         if (fabric_path) fabric_path = fabric_buf;
     }
-    if (integrator) {
-        int ok = 0;
-        for (int i = 0; drape_integrator_names[i]; i++)
-            ok |= strcmp(drape_integrator_names[i], integrator) == 0;
-        if (!ok) return usage_error("--integrator: unknown integrator `%s'%s; see `drape run --help'", integrator, "");
-    }
-    if (form && strcmp(form, "consistent") && strcmp(form, "seed"))
-        return usage_error("--energy-form: expected consistent or seed, got `%s'%s", form, "");
-
     ra.scene_path = scene_path;
     ra.fabric_path = fabric_path;
-    ra.integrator = integrator;
-    ra.form = form;
     ra.out_dir = out_dir;
     ra.resume_dir = resume_dir;
-    ra.rtol = rtol;
-    ra.atol = atol;
-    ra.spacing = spacing;
-    ra.t_max = t_max;
-    ra.strain_limit = strain_limit;
-    ra.max_steps = max_steps;
-    ra.max_order = max_order;
-    ra.method = method;
-    ra.linsol = linsol;
     ra.csv = csv;
     ra.quiet = quiet;
     if (resume_dir) return drape_cli_run_one(&ra, NULL);

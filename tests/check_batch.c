@@ -534,6 +534,28 @@ START_TEST(test_usage)
     ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --rtol 2", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --spacing 5kg", out, CAP, err, CAP), 2);
     ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --integrator euler", out, CAP, err, CAP), 2);
+    /* every option passed on is refused before any run, with run's reason */
+    static const char *const bad[] = {
+        "--atol -1mm", "--energy-form exact", "--t-max 0", "--max-steps 0",
+        "--strain-limit 0", "--method quench", "--linear-solver lu", "--max-order 6",
+        "--specimens 0", "--seed -1", "--fall-time 1m", "--fall-step 0",
+        "--fall-swing 1", "--fall-tol -1cm", "--fall-fold-time -1s", "--fall-retry 1e400",
+        "--damping-shear 2m", "--terms stretch,twist"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char run_err[1024];
+        snprintf(args, sizeof args, "run %s " SCENE, bad[i]);
+        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+        snprintf(run_err, sizeof run_err, "%s", err + strlen("drape: "));
+        *strchr(run_err, '\n') = 0;
+        snprintf(args, sizeof args, "batch " SCENE " " COTTON " %s --out %s", bad[i],
+                 subdir("badopt"));
+        ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+        ck_assert_msg(strncmp(err, "drape: batch: ", 14) == 0 && strstr(err, run_err) != NULL,
+                      "%s: run said `%s', batch `%s'", bad[i], run_err, err);
+        ck_assert_msg(access(subdir("badopt"), F_OK) != 0, "%s: --out made", bad[i]);
+    }
+    /* animate writes a renderer's frames: not a batch's method */
+    ck_assert_int_eq(tu_run_drape("batch " SCENE " " COTTON " --method animate", out, CAP, err, CAP), 2);
     /* the scene is checked once, before any run */
     const char *scene = tu_write_file("bad-scene.yaml", "scene: hang\nspacing: 1 kg\n");
     snprintf(args, sizeof args, "batch %s %s --out %s", scene, COTTON, subdir("badscene"));
