@@ -501,6 +501,39 @@ static double uniform_pm1(uint64_t *state)
     return 2.0 * u - 1.0;
 }
 
+/* The hinge of direction d that the area of lattice point (i, j) goes to
+ * (L6): the nearest one along the same yarn within 3 spacings, else the
+ * nearest in the plane.  A clamp hinge (L3') takes area too: its K =
+ * psi / (length sigma) is the curvature of the strip just beyond the
+ * edge, where that area lies; but not one held at CLAMP_HINGE_MIN, whose
+ * interval lies on the platform (a stiff hinge that keeps the yarn
+ * straight, not a piece of bending fabric).  -1 if there is none. */
+static int takes_area(const drape_hinge *H)
+{
+    return H->length <= 0.0 || H->length > CLAMP_HINGE_MIN;
+}
+
+static int nearest_hinge(const drape_lattice *L, const int *hid, int i, int j, int d)
+{
+    static const int step[2][2] = {{1, 0}, {0, 1}};
+    for (int r = 1; r <= 3; r++)
+        for (int sg = -1; sg <= 1; sg += 2) {
+            int ii = i + sg * r * step[d][0], jj = j + sg * r * step[d][1];
+            if (grid_at(L, ii, jj) < 0) continue;
+            int h = hid[2 * ((long)jj * L->ni + ii) + d];
+            if (h >= 0 && takes_area(&L->hinges[h])) return h;
+        }
+    int best = -1;
+    long best_d2 = LONG_MAX;
+    for (int h = 0; h < L->n_hinges; h++) {
+        const drape_hinge *H = &L->hinges[h];
+        if ((int)H->dir != d || !takes_area(H)) continue;
+        long di = L->gi[H->mid] - i, dj = L->gj[H->mid] - j, d2 = di * di + dj * dj;
+        if (d2 < best_d2) best_d2 = d2, best = h;
+    }
+    return best;
+}
+
 /* Oblique strip (issue 18, L6): along a staircase edge some particles lack
  * a neighbour in a yarn direction, so they carry no hinge in it, and some
  * squares inside the strip lack a corner, so there is no twist cell: that
@@ -512,7 +545,6 @@ static double uniform_pm1(uint64_t *state)
  * 1. */
 static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s)
 {
-    static const int step[2][2] = {{1, 0}, {0, 1}};
     int *hid = drape_calloc((size_t)L->ni * L->nj * 2, sizeof(int));
     int *qid = drape_calloc((size_t)L->ni * L->nj, sizeof(int));
     if (!hid || !qid) { drape_free(hid); drape_free(qid); return -1; }
@@ -526,30 +558,20 @@ static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s
         int p = L->cells[c].p[0];
         qid[(long)L->gj[p] * L->ni + L->gi[p]] = c;
     }
-    for (int p = 0; p < L->n; p++) {
-        int i = L->gi[p], j = L->gj[p];
-        /* only the part beyond the platform edge: the particles on the
-         * platform have no hinge because nothing bends there, not because
-         * the strip ends */
-        double a = free_area(g, s, i - 0.5, i + 0.5, j - 0.5, j + 0.5);
-        for (int d = 0; d < 2 && L->n_hinges > 0; d++) {
-            if (hid[2 * ((long)j * L->ni + i) + d] >= 0 || a <= 0.0) continue;
-            for (int r = 1; r <= 2; r++) {
-                int got = -1;
-                for (int sg = -1; sg <= 1 && got < 0; sg += 2) {
-                    int ii = i + sg * r * step[d][0], jj = j + sg * r * step[d][1];
-                    if (grid_at(L, ii, jj) < 0) continue;
-                    got = hid[2 * ((long)jj * L->ni + ii) + d];
-                }
-                if (got >= 0) {
-                    drape_hinge *H = &L->hinges[got];
-                    double lam = H->length > 0.0 ? H->length : 1.0;
-                    H->weight += a * lam;
-                    break;
-                }
+    /* every lattice point, particle or not, whose cell reaches into the
+     * strip beyond the platform edge (only that part: on the platform
+     * nothing bends) and has no hinge in direction d */
+    for (int j = -1; j <= L->nj && L->n_hinges > 0; j++)
+        for (int i = -1; i <= L->ni; i++) {
+            int p = grid_at(L, i, j);
+            double a = free_area(g, s, i - 0.5, i + 0.5, j - 0.5, j + 0.5);
+            if (a <= SNAP) continue;
+            for (int d = 0; d < 2; d++) {
+                if (p >= 0 && hid[2 * ((long)j * L->ni + i) + d] >= 0) continue;
+                int h = nearest_hinge(L, hid, i, j, d);
+                if (h >= 0) L->hinges[h].weight += a; /* weight: area / sigma^2 */
             }
         }
-    }
     if (L->n_cells > 0) {
         for (int j = -1; j < L->nj; j++)
             for (int i = -1; i < L->ni; i++) {

@@ -668,8 +668,9 @@ START_TEST(test_oblique_lattice)
 {
     drape_fabric F;
     load_fabric("fabrics/cotton-poly-wang.yaml", &F);
-    for (int k = 0; k < 3; k++) {
-        double deg = k == 0 ? 22.5 : k == 1 ? 45.0 : 71.0, sg = 0.0025;
+    for (int k = 0; k < 9; k++) {
+        double deg = k % 3 == 0 ? 22.5 : k % 3 == 1 ? 45.0 : 71.0;
+        double sg = k < 3 ? 0.0025 : k < 6 ? 0.005 : 0.01;
         drape_scene s;
         strip_scene(&s, deg, sg);
         drape_lattice *L = lattice(&s, &F);
@@ -684,19 +685,20 @@ START_TEST(test_oblique_lattice)
             ck_assert_close_abs(u / sg - round(u / sg), 0.0, 1e-9);
             ck_assert_close_abs(v / sg - round(v / sg), 0.0, 1e-9);
         }
-        for (int h = 0; h < L->n_hinges; h++) {
-            const drape_hinge *H = &L->hinges[h];
-            if (!L->fixed[H->prev] && !L->fixed[H->mid] && !L->fixed[H->next])
-                hw[H->dir] += H->weight * sg * sg;
-        }
+        for (int h = 0; h < L->n_hinges; h++)
+            hw[L->hinges[h].dir] += L->hinges[h].weight * sg * sg;
         for (int c = 0; c < L->n_cells; c++) cw += L->cells[c].weight * sg * sg;
-        /* the free part of the strip is 6 x 2.5 cm: the cells cover it; the
-         * hinges with no clamped particle cover it but for a band of about
-         * 1.5 sigma at the platform */
+        /* the free part of the strip is 6 x 2.5 cm: the cells cover it, and
+         * so do the hinges of each direction (the clamp hinges stand for
+         * their part beyond the edge as cell area x length, which is not
+         * quite that cell's area beyond it: 0.3 % at the most here; the
+         * staircase's points outside the strip once left up to a third
+         * of the area, at 1 cm, without stiffness) */
         ck_assert_close_rel(cw, 0.06 * 0.025, 1e-9);
         for (int d = 0; d < 2; d++)
-            ck_assert_msg(hw[d] > 0.025 * (0.06 - 3.0 * sg) && hw[d] < 0.06 * 0.025,
-                          "%g deg: hinge area %g (direction %d)", deg, hw[d], d);
+            ck_assert_msg(fabs(hw[d] / (0.06 * 0.025) - 1.0) < 3e-3,
+                          "%g deg at %g m: hinge area %g (direction %d), free area %g", deg, sg,
+                          hw[d], d, 0.06 * 0.025);
         drape_lattice_free(L);
     }
 }
@@ -823,7 +825,7 @@ START_TEST(test_cantilever_angles)
                    deg[k], c.tip_angle_deg, atan2(dr, xr) * 180 / PI, ccyl, drop * 1e3,
                    dr * 1e3, e);
         /* issue 18 asks for 1 %.  Met along the yarns; an oblique strip
-         * droops 1.2-1.8 % further than the elastica at 2.5 mm (at 45
+         * droops 1.0-1.8 % further than the elastica at 2.5 mm (at 45
          * degrees 1.7 % at 1.75 mm too: with a 100 times stiffer shear it
          * reaches the elastica, so the rest is the plate's finite
          * in-plane shear stiffness, docs/validation.md section 9).  This
