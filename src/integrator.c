@@ -77,7 +77,7 @@ const drape_integrator_type *const *drape_integrator_types(void)
 
 /* ---- right-hand side and Jacobian --------------------------------------- */
 
-static void scatter(drape_ode *o, const double *y)
+void drape_ode_scatter(drape_ode *o, const double *y)
 {
     const drape_lattice *L = o->lattice;
     for (int k = 0; k < L->n_free; k++) {
@@ -95,7 +95,7 @@ int drape_ode_rhs(drape_ode *o, unsigned parts, int include_kinematic,
     const drape_lattice *L = o->lattice;
     if (o->stop && *o->stop) return -1;
     o->n_rhs++;
-    scatter(o, y);
+    drape_ode_scatter(o, y);
     parts &= o->parts;
     int rc = 0;
     if (parts) {
@@ -122,7 +122,7 @@ int drape_ode_jacobian(drape_ode *o, unsigned parts, int include_kinematic,
                        const double *y, double *J)
 {
     o->n_jac++;
-    scatter(o, y);
+    drape_ode_scatter(o, y);
     parts &= o->parts;
     int rc = drape_model_jacobian_first_order(o->model, parts, include_kinematic,
                                               o->x, o->v, J);

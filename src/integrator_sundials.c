@@ -289,19 +289,6 @@ static int linsys_ark(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix A,
 
 /* ---- linsol schur: preconditioner and J*v (numerics.md 3.3) ---------------- */
 
-/* Full x, v of the ode from y (fixed particles keep xinit, 0). */
-static void scatter_y(drape_ode *o, const double *y)
-{
-    const drape_lattice *L = o->lattice;
-    for (int k = 0; k < L->n_free; k++) {
-        int id = L->free_to_id[k];
-        for (int c = 0; c < 3; c++) {
-            o->x[3 * id + c] = y[3 * k + c];
-            o->v[3 * id + c] = y[o->nf3 + 3 * k + c];
-        }
-    }
-}
-
 /* Same signature as ARKLsPrecSetupFn.  New K, D when SUNDIALS asks for a
  * fresh Jacobian (!jok); S(gamma) refactored unless K, D and gamma are
  * those of the current factor. */
@@ -321,7 +308,7 @@ static int psetup_cb(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok,
         drape_ode *o = s->ode;
         s->jac_valid = 0;
         o->n_jac++;
-        scatter_y(o, N_VGetArrayPointer(y));
+        drape_ode_scatter(o, N_VGetArrayPointer(y));
         if (drape_model_jacobian(o->model, s->jparts, o->x, o->v, s->K,
                                  s->have_d ? s->D : NULL) != 0)
             return 1;

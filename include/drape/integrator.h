@@ -159,6 +159,8 @@ typedef struct drape_ode {
  * o->stop is raised (the backends pass it on as an unrecoverable failure). */
 int drape_ode_rhs(drape_ode *o, unsigned parts, int include_kinematic,
                   const double *y, double *ydot);
+/* o->x, o->v (full 3n) from y (free particles only; fixed keep xinit, 0). */
+void drape_ode_scatter(drape_ode *o, const double *y);
 /* J (nnz of o->pattern) = Jacobian of that right-hand side.  Returns 0/1. */
 int drape_ode_jacobian(drape_ode *o, unsigned parts, int include_kinematic,
                        const double *y, double *J);
