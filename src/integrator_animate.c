@@ -186,7 +186,9 @@ static int anim_reinit(void *st, double t0, const double *y0, drape_error *err)
     anim *s = st;
     memcpy(s->y, y0, sizeof(double) * (size_t)s->dim);
     memcpy(s->y_prev, y0, sizeof(double) * (size_t)s->dim);
-    s->t = s->t0 = t0;
+    /* the grid t0 + k h stays the run's (a resumed run restarts at an
+     * output point, which may be off the grid: an equilibrium check) */
+    s->t = t0;
     s->steps = s->halvings = s->factors = s->failed_factors = s->newton = s->backtracks = 0;
     s->rescales = 0;
     s->e_valid = 0;
