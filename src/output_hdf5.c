@@ -292,7 +292,14 @@ drape_h5 *drape_h5_open(const char *dir, const drape_lattice *L, drape_error *er
     /* never write through a stale temporary or a symlink (EXCL) */
     unlink(h->tmp);
     unlink(h->xmf_tmp);
-    h->file = H5Fcreate(h->tmp, H5F_ACC_EXCL, H5P_DEFAULT, H5P_DEFAULT);
+    /* the 1.8 file format or later: its object headers, heaps and B-trees
+     * carry checksums, so a damaged checkpoint is refused by --resume
+     * instead of being read (HDF5 1.10's reader of the default, earlier
+     * format crashed on a damaged local heap) */
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl >= 0 && H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_LATEST) >= 0)
+        h->file = H5Fcreate(h->tmp, H5F_ACC_EXCL, H5P_DEFAULT, fapl);
+    if (fapl >= 0) H5Pclose(fapl);
     if (h->file < 0) {
         h5_fail(h->path, err, "cannot create the file");
         goto fail;
