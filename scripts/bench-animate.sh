@@ -53,8 +53,12 @@ run_one() { # case method args...
     echo "bench-animate: $c $m: drape run -q $*" >&2
     start=$(date +%s)
     if "$DRAPE" run -q "$@" > "$f.tmp"; then mv "$f.tmp" "$f"; else
-        echo "bench-animate: $c $m failed" >&2
-        mv "$f.tmp" "$f"
+        st=$?
+        # a failed or interrupted run must not replace the last complete
+        # one, nor reach the tables
+        mv "$f.tmp" "$f.failed"
+        echo "bench-animate: $c $m failed (exit $st; output in $f.failed); $f and the tables left as they were" >&2
+        exit 1
     fi
     end=$(date +%s)
     {
@@ -171,7 +175,9 @@ if b in s and e in s:
     s = s[:s.index(b) + len(b)] + "\n" + text + s[s.index(e):]
 else:
     s += "\n## Animate: frames at graphics speed (issue 16)\n\n" + b + "\n" + text + e + "\n"
-open(doc, "w").write(s)
-open(os.path.join(out, "table.md"), "w").write(text)
+open(doc + ".tmp", "w").write(s)
+os.replace(doc + ".tmp", doc)
+open(os.path.join(out, "table.md.tmp"), "w").write(text)
+os.replace(os.path.join(out, "table.md.tmp"), os.path.join(out, "table.md"))
 print(text)
 PY

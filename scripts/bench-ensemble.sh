@@ -118,20 +118,45 @@ case_args_model() {
     esac
 }
 
-# run NAME ARGS...: drape run ARGS > OUT/NAME.json, with its .meta
+# run NAME ARGS...: drape run ARGS > OUT/NAME.json, with its .meta.  A run
+# with a result (exit 0, or 4: every specimen failed, its specimens say
+# why) replaces the last one; an interrupted or broken run (no result)
+# leaves OUT/NAME.json and .meta as they were (a stored accurate ensemble
+# costs hours) and stops the script.
 run() {
     name=$1
     shift
     echo "bench-ensemble: $name: drape run $*" >&2
     t=$(mktemp)
-    /usr/bin/time -f "%U %S %e" -o "$t" "$DRAPE" run -q "$@" > "$OUT/$name.json.tmp" ||
-        echo "bench-ensemble: $name: exit status $? (kept: its specimens say why)" >&2
+    st=0
+    /usr/bin/time -f "%U %S %e" -o "$t" "$DRAPE" run -q "$@" > "$OUT/$name.json.tmp" || st=$?
+    if [ "$st" -ne 0 ] && { [ "$st" -ne 4 ] || [ ! -s "$OUT/$name.json.tmp" ]; }; then
+        mv "$OUT/$name.json.tmp" "$OUT/$name.json.failed"
+        rm -f "$t"
+        echo "bench-ensemble: $name: exit status $st, no result: $OUT/$name.json left as it was (output in $name.json.failed)" >&2
+        exit 1
+    fi
+    [ "$st" -eq 0 ] || echo "bench-ensemble: $name: exit status $st (kept: its specimens say why)" >&2
     mv "$OUT/$name.json.tmp" "$OUT/$name.json"
-    read -r u s e < "$t"
+    # GNU time writes "Command exited with non-zero status N" before the
+    # times when the command fails: the times are its last line
+    read -r u s e <<EOT
+$(tail -n 1 "$t")
+EOT
     rm -f "$t"
     printf 'command: drape run -q %s\ncommit: %s\ndate: %s\ncpu_s: %s\nwall_s: %s\n' \
         "$*" "$COMMIT" "$(date -u +%FT%TZ)" "$(echo "$u $s" | awk '{print $1 + $2}')" "$e" \
         > "$OUT/$name.meta"
+}
+
+# compare A B OUT: drape compare A B > OUT, replaced only when complete
+compare() {
+    "$DRAPE" compare "$1" "$2" > "$3.tmp" || {
+        echo "bench-ensemble: drape compare $1 $2 failed; $3 left as it was" >&2
+        rm -f "$3.tmp"
+        exit 1
+    }
+    mv "$3.tmp" "$3"
 }
 
 # calibrate NAME REFERENCE ARGS...: the first N_CAL seeds of REFERENCE (a
@@ -157,15 +182,15 @@ for c in $CASES; do
     # shellcheck disable=SC2086
     [ "$N_CAL" -le 0 ] ||
         calibrate "$c-calib" "$OUT/$c-accurate.json" $a --method dynamic --integrator auto
-    "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" > "$OUT/$c-compare.json"
+    compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" "$OUT/$c-compare.json"
     # the scene's own integrator (arkode-imex), where its ensemble was made
     # (cotton here; cotton-poly and tablecloth by hand, their .meta says how)
     if [ -s "$OUT/$c-imex.json" ]; then
         # its CPU in this run too (the scene's integrator)
         # shellcheck disable=SC2086
         [ "$N_CAL" -le 0 ] || calibrate "$c-imex-calib" "$OUT/$c-imex.json" $a --method dynamic
-        "$DRAPE" compare "$OUT/$c-imex.json" "$OUT/$c-fall.json" > "$OUT/$c-imex-fall-compare.json"
-        "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" > "$OUT/$c-imex-compare.json"
+        compare "$OUT/$c-imex.json" "$OUT/$c-fall.json" "$OUT/$c-imex-fall-compare.json"
+        compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" "$OUT/$c-imex-compare.json"
     fi
 done
 # item 2: a second accurate setting, the scene's own integrator (arkode-imex)
@@ -177,19 +202,17 @@ case " $CASES " in
         # shellcheck disable=SC2086
         run cotton-1cm-imex scenes/cusick.yaml $DARGS --specimens "$N_REF" -j "$JOBS" --method dynamic
     fi
-    "$DRAPE" compare "$OUT/cotton-1cm-accurate.json" "$OUT/cotton-1cm-imex.json" \
-        > "$OUT/cotton-1cm-imex-compare.json"
-    "$DRAPE" compare "$OUT/cotton-1cm-imex.json" "$OUT/cotton-1cm-fall.json" \
-        > "$OUT/cotton-1cm-imex-fall-compare.json" ;;
+    compare "$OUT/cotton-1cm-accurate.json" "$OUT/cotton-1cm-imex.json" "$OUT/cotton-1cm-imex-compare.json"
+    compare "$OUT/cotton-1cm-imex.json" "$OUT/cotton-1cm-fall.json" "$OUT/cotton-1cm-imex-fall-compare.json" ;;
 esac
 # the comparisons, again for every case whose ensembles exist (cheap; so
 # that BENCH_TABLES_ONLY=1 picks up what a newer `drape compare` reports)
 for c in $ALL_CASES; do
     [ -s "$OUT/$c-accurate.json" ] && [ -s "$OUT/$c-fall.json" ] || continue
-    "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" > "$OUT/$c-compare.json"
+    compare "$OUT/$c-accurate.json" "$OUT/$c-fall.json" "$OUT/$c-compare.json"
     if [ -s "$OUT/$c-imex.json" ]; then
-        "$DRAPE" compare "$OUT/$c-imex.json" "$OUT/$c-fall.json" > "$OUT/$c-imex-fall-compare.json"
-        "$DRAPE" compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" > "$OUT/$c-imex-compare.json"
+        compare "$OUT/$c-imex.json" "$OUT/$c-fall.json" "$OUT/$c-imex-fall-compare.json"
+        compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" "$OUT/$c-imex-compare.json"
     fi
 done
 # item 5: the fall ensemble against the spacing

@@ -104,9 +104,11 @@ fi
 cp "$tmp/csv" "$CSV"
 load1=$(cut -d" " -f1-3 /proc/loadavg)
 
-python3 - "$CSV" "$DOC" "$BEGIN" "$END" "$T" "$load0" "$load1" "$JOBS" "$PARTIAL" <<'PY'
+COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+git diff --quiet HEAD 2>/dev/null || COMMIT="$COMMIT (with uncommitted changes)"
+python3 - "$CSV" "$DOC" "$BEGIN" "$END" "$T" "$load0" "$load1" "$JOBS" "$PARTIAL" "$COMMIT" <<'PY'
 import csv, sys, platform, os, datetime
-path, doc, begin, end, limit, load0, load1, jobs, partial = sys.argv[1:10]
+path, doc, begin, end, limit, load0, load1, jobs, partial, commit = sys.argv[1:11]
 rows = list(csv.DictReader(open(path)))
 def f(v, fmt):
     try: return fmt % float(v)
@@ -118,7 +120,7 @@ try:
             cpu = line.split(":", 1)[1].strip(); break
 except OSError: pass
 text = open(doc).read()
-head = (f"`scripts/bench-quick.sh` (`make bench-quick`) on "
+head = (f"`scripts/bench-quick.sh` (`make bench-quick`) at drape {commit} on "
         f"{datetime.date.today().isoformat()}, {cpu}, {os.cpu_count()} cores, "
         f"{jobs} process(es) at a time, time limit {limit} s per run (wall; a run "
         f"stopped by it shows the simulated time it reached); load average {load0} "
@@ -147,6 +149,7 @@ if begin in text and end in text:
     text = text[:a] + "\n".join(out) + text[b:]
 else:
     text = text.rstrip("\n") + "\n\n" + "\n".join(out) + "\n"
-open(doc, "w").write(text)
+open(doc + ".tmp", "w").write(text)
+os.replace(doc + ".tmp", doc)
 PY
 echo "bench-quick: wrote $CSV and the table in $DOC" >&2

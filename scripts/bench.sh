@@ -95,7 +95,18 @@ bench() {
     [ -n "$it" ] && set -- "$@" --integrators "$it"
     echo "bench: $name: drape bench $*" >&2
     lb=$(load1); t0=$(date +%s)
-    "$DRAPE" bench "$@" --out "$OUT" --name "$name"
+    # into a directory of its own, moved into place only when the run is
+    # complete: drape bench rewrites its CSV after every point, and a run
+    # that stops half-way must not replace the last complete one (whose
+    # command and commit runs.csv keeps)
+    part=$(mktemp -d "$OUT/.partial-$name.XXXXXX")
+    "$DRAPE" bench "$@" --out "$part" --name "$name" || {
+        st=$?
+        echo "bench: $name: drape bench failed (exit $st); $OUT/$name.csv left as it was, partial CSV in $part" >&2
+        exit "$st"
+    }
+    mv "$part/$name.csv" "$OUT/$name.csv"
+    rmdir "$part"
     record "$name" "$*" "$(( $(date +%s) - t0 ))" "$lb" "$(load1)"
 }
 
@@ -120,6 +131,7 @@ for name in $SCENES; do
     kernels)
         lb=$(load1); t0=$(date +%s)
         echo "bench: kernels: drape bench --kernels --sizes $SIZES" >&2
+        # (drape bench --kernels replaces its CSV atomically at the end)
         "$DRAPE" bench --kernels scenes/hang.yaml --sizes "$SIZES" --out "$OUT" --name kernels
         record kernels "--kernels scenes/hang.yaml --sizes $SIZES" "$(( $(date +%s) - t0 ))" "$lb" "$(load1)"
         ;;

@@ -545,7 +545,7 @@ START_TEST(test_usage)
         char run_err[1024];
         snprintf(args, sizeof args, "run %s " SCENE, bad[i]);
         ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
-        snprintf(run_err, sizeof run_err, "%s", err + strlen("drape: "));
+        snprintf(run_err, sizeof run_err, "%.900s", err + strlen("drape: "));
         *strchr(run_err, '\n') = 0;
         snprintf(args, sizeof args, "batch " SCENE " " COTTON " %s --out %s", bad[i],
                  subdir("badopt"));
