@@ -42,7 +42,7 @@ LDFLAGS ?=
 
 DEB_PACKAGES = libgsl-dev libsundials-dev libsuitesparse-dev libhdf5-dev \
                libyaml-dev check pkg-config libopenblas-dev \
-               libgeos-dev libjson-c-dev libxml2-dev help2man man-db
+               libgeos-dev libjson-c-dev libxml2-dev librsvg2-dev help2man man-db
 
 # Flags drape itself needs (not overridable: the language level is part of
 # the code).  pkg-config is expanded lazily, so `make deps all` works on a
@@ -59,10 +59,15 @@ DRAPE_LIBS  = -lsundials_arkode -lsundials_cvode -lsundials_kinsol \
               -lsundials_sunlinsolklu -lsundials_sunlinsolspgmr \
               -lklu -lcholmod -lsuitesparseconfig \
               -lgsl -lopenblas \
-              $(shell pkg-config --libs yaml-0.1 hdf5-serial geos json-c 2>/dev/null) -lm
-# The tests also parse drape's SVG pictures with libxml2.
-CHECK_CFLAGS = $(shell pkg-config --cflags check libxml-2.0 2>/dev/null)
-CHECK_LIBS   = $(shell pkg-config --libs check libxml-2.0 2>/dev/null)
+              $(shell pkg-config --libs yaml-0.1 hdf5-serial geos json-c 2>/dev/null) \
+              $(shell pkg-config --libs librsvg-2.0 cairo 2>/dev/null) -lm
+# librsvg and cairo draw shadow.png from shadow.svg (output_png.c); their
+# headers (glib's among them) are given to that file only.
+RSVG_CFLAGS = $(shell pkg-config --cflags librsvg-2.0 cairo 2>/dev/null)
+# The tests also parse drape's SVG pictures with libxml2 and read its PNG
+# pictures back with cairo.
+CHECK_CFLAGS = $(shell pkg-config --cflags check libxml-2.0 cairo 2>/dev/null)
+CHECK_LIBS   = $(shell pkg-config --libs check libxml-2.0 cairo 2>/dev/null)
 
 ALL_CFLAGS = $(DRAPE_CPPFLAGS) $(DRAPE_CFLAGS) $(CPPFLAGS) $(CFLAGS)
 
@@ -106,6 +111,8 @@ $(O)/drape: $(CLI_OBJ) $(O)/libdrape.a
 $(O)/src/%.o: src/%.c $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -c -o $@ $<
+
+$(O)/src/output_png.o: ALL_CFLAGS += $(RSVG_CFLAGS)
 
 # The compiled-in data directory (src/cli_data.h): rewritten only when
 # DATADIR changes, so `make install PREFIX=...` rebuilds what depends on it.

@@ -1,6 +1,7 @@
 #!/bin/sh
 # valgrind.sh: memcheck on `drape check` of every shipped and every bad
-# input file, on one small `drape run` with frames, and on the test suites
+# input file, on one small `drape run` with frames, one with the shadow
+# picture (SVG and PNG), and on the test suites
 # of the loaders, the lattice and the allocation-failure walks
 # (tests/check_alloc.c), which is where "no leak" of issue 7, item 4, is
 # checked.  Any memcheck error or definite/indirect/possible leak fails.
@@ -72,6 +73,9 @@ vg . check-good zero "$DRAPE" check fabrics/*.yaml scenes/*.yaml
 vg . check-bad nonzero "$DRAPE" check tests/bad/*.yaml
 vg . run zero "$DRAPE" run scenes/hang.yaml --spacing 5cm --t-max 0.05s \
     --out "$LOGS/run" -q
+# the shadow picture, SVG and PNG (librsvg, cairo, pango: scripts/valgrind.supp)
+vg . run-shadow zero "$DRAPE" run scenes/cusick.yaml --spacing 3cm --method static \
+    --specimens 1 --out "$LOGS/run-shadow" -q
 export CK_FORK=no
 for s in $SUITES; do
     export CK_RUN_SUITE="$s"

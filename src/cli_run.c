@@ -489,7 +489,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
         if (!child && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
-            drape_cli_check_target(out_dir, "shadow.svg", &err) != 0)
+            (drape_cli_check_target(out_dir, "shadow.svg", &err) != 0 ||
+             drape_cli_check_target(out_dir, "shadow.png", &err) != 0))
             goto fail;
         if (s.has_frames && s.out_obj) {
             rc.obj = drape_obj_new(out_dir, L, f.name, drape_scene_kind_name(s.kind), &err);

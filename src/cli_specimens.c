@@ -358,14 +358,40 @@ int drape_cli_write_shadow(const char *dir, const drape_scene *s,
     sc.n_failed = isfinite(nf) ? (int)nf : 0;
     sc.hist = r->hist;
     sc.hist_n = DRAPE_ENSEMBLE_MAX_NODES + 1;
-    drape_cli_afile af;
-    if (drape_cli_afile_open(&af, path, err) != 0) return -1;
-    if (drape_svg_shadow_write(af.f, &sc, sp, n) != 0) {
-        drape_cli_afile_abort(&af);
-        return drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot write: %s",
-                               strerror(errno));
+    /* drawn once into memory, then written as shadow.svg and rendered
+     * into shadow.png; both complete before either is renamed into place */
+    char *svg = NULL;
+    size_t len = 0;
+    FILE *mem = open_memstream(&svg, &len);
+    if (!mem) return drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+    int bad = drape_svg_shadow_write(mem, &sc, sp, n) != 0;
+    if (fclose(mem) != 0 || bad) {
+        free(svg);
+        return drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
     }
-    return drape_cli_afile_commit(&af, err);
+    int rc = -1;
+    drape_cli_afile as, ap;
+    int as_open = 0, ap_open = 0;
+    if (drape_cli_afile_open(&as, path, err) != 0) goto out;
+    as_open = 1;
+    if (fwrite(svg, 1, len, as.f) != len || fflush(as.f) != 0) {
+        drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot write: %s", strerror(errno));
+        goto out;
+    }
+    snprintf(path, sizeof path, "%s/shadow.png", dir);
+    if (drape_cli_afile_open(&ap, path, err) != 0) goto out;
+    ap_open = 1;
+    if (drape_png_from_svg(svg, len, ap.f, path, err) != 0) goto out;
+    as_open = 0;
+    if (drape_cli_afile_commit(&as, err) != 0) goto out;
+    ap_open = 0;
+    if (drape_cli_afile_commit(&ap, err) != 0) goto out;
+    rc = 0;
+out:
+    if (as_open) drape_cli_afile_abort(&as);
+    if (ap_open) drape_cli_afile_abort(&ap);
+    free(svg);
+    return rc;
 }
 
 /* ---- driver ------------------------------------------------------------------- */
@@ -455,7 +481,8 @@ int drape_cli_specimens_run(const run_args *a)
                     "them)\n", a->out_dir, n + 1, k - 1, n);
     }
     if (a->out_dir && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
-        drape_cli_check_target(a->out_dir, "shadow.svg", &err) != 0)
+        (drape_cli_check_target(a->out_dir, "shadow.svg", &err) != 0 ||
+         drape_cli_check_target(a->out_dir, "shadow.png", &err) != 0))
         goto fail;
 
     struct sigaction sa, old_int, old_term;

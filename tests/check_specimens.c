@@ -4,11 +4,13 @@
  * single run with the same seed, and the picture is parsed as XML
  * (libxml2) and its outlines counted. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include <cairo.h>
 #include <json-c/json.h>
 #include <libxml/parser.h>
 #include <libxml/xpath.h>
@@ -132,6 +134,76 @@ START_TEST(test_ensemble_statistics)
     char sub[700];
     snprintf(sub, sizeof sub, "%s/specimen-004", dir);
     ck_assert_msg(access(sub, F_OK) == 0, "%s missing", sub);
+}
+END_TEST
+
+/* A numeric attribute of the SVG's root element ("123.4mm" reads 123.4;
+ * viewBox: its first number). */
+static double svg_root_num(const char *path, const char *attr)
+{
+    xmlDocPtr doc = xmlReadFile(path, NULL, XML_PARSE_NONET);
+    if (!doc) return NAN;
+    xmlChar *v = xmlGetProp(xmlDocGetRootElement(doc), BAD_CAST attr);
+    double x = v ? strtod((const char *)v, NULL) : NAN;
+    xmlFree(v);
+    xmlFreeDoc(doc);
+    return x;
+}
+
+/* shadow.png is shadow.svg rendered: its size is the SVG's in mm at
+ * DRAPE_PNG_DPI, the margin is white, the support disk at the centre is
+ * grey under the translucent shadows, and the legend's histogram bars
+ * (#46a) are there.  A directory in its way is refused before the run. */
+START_TEST(test_ensemble_png)
+{
+    char dir[600], args[1200], svg[700], png[700], cmd[2000];
+    snprintf(dir, sizeof dir, "%s/ens-png", tu_scratch_dir());
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 3 -j 1 --out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
+    snprintf(png, sizeof png, "%s/shadow.png", dir);
+    double w_mm = svg_root_num(svg, "width"), h_mm = svg_root_num(svg, "height");
+    double x0_mm = svg_root_num(svg, "viewBox"); /* -half: the centre is at -x0 */
+    ck_assert(w_mm > 100.0 && h_mm > 100.0 && x0_mm < 0.0);
+    cairo_surface_t *s = cairo_image_surface_create_from_png(png);
+    ck_assert_msg(cairo_surface_status(s) == CAIRO_STATUS_SUCCESS, "%s: %s", png,
+                  cairo_status_to_string(cairo_surface_status(s)));
+    int W = cairo_image_surface_get_width(s), H = cairo_image_surface_get_height(s);
+    double px_mm = 150.0 / 25.4;
+    ck_assert_msg(fabs(W - w_mm * px_mm) <= 1.0 && fabs(H - h_mm * px_mm) <= 1.0,
+                  "%d x %d pixels for %g x %g mm", W, H, w_mm, h_mm);
+    ck_assert(cairo_image_surface_get_format(s) == CAIRO_FORMAT_RGB24 ||
+              cairo_image_surface_get_format(s) == CAIRO_FORMAT_ARGB32);
+    const unsigned char *d = cairo_image_surface_get_data(s);
+    int stride = cairo_image_surface_get_stride(s);
+#define PX(x, y, c) ((int)((const uint32_t *)(const void *)(d + (size_t)(y) * (size_t)stride))[x] >> \
+                     (16 - 8 * (c)) & 0xff) /* c: 0 red, 1 green, 2 blue */
+    for (int c = 0; c < 3; c++) ck_assert_int_eq(PX(2, 2, c), 255);
+    int cx = (int)(-x0_mm * px_mm), cy = (int)(-x0_mm * px_mm);
+    int lo = 255, hi = 0;
+    for (int c = 0; c < 3; c++) {
+        int v = PX(cx, cy, c);
+        lo = v < lo ? v : lo;
+        hi = v > hi ? v : hi;
+    }
+    ck_assert_msg(lo >= 140 && hi <= 200 && hi - lo <= 40, "centre %d..%d", lo, hi);
+    long bars = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++)
+            bars += PX(x, y, 0) == 0x44 && PX(x, y, 1) == 0x66 && PX(x, y, 2) == 0xaa;
+#undef PX
+    /* each bar is 3.5 mm high and at least 30 / 3 mm long */
+    ck_assert_msg(bars >= (long)(0.8 * 3.5 * 10.0 * px_mm * px_mm), "%ld bar pixels", bars);
+    cairo_surface_destroy(s);
+
+    snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir -p %s/shadow.png", dir, dir);
+    ck_assert_int_eq(system(cmd), 0);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3 && out[0] == 0 && strstr(err, "shadow.png") &&
+                      strstr(err, "in the way"), "exit %d, %s", st, err);
+    snprintf(cmd, sizeof cmd, "test \"$(ls %s)\" = shadow.png && rm -rf %s", dir, dir);
+    ck_assert_msg(system(cmd) == 0, "a specimen ran: %s", dir);
 }
 END_TEST
 
@@ -847,6 +919,7 @@ Suite *specimens_suite(void)
     TCase *tc = tcase_create("cli");
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_ensemble_statistics);
+    tcase_add_test(tc, test_ensemble_png);
     tcase_add_test(tc, test_ensemble_csv);
     tcase_add_test(tc, test_ensemble_failures);
     tcase_add_test(tc, test_ensemble_input_errors);
