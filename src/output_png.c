@@ -8,8 +8,10 @@
  * Size: the SVG gives its width and height in mm; at DRAPE_PNG_DPI (150,
  * 5.9 pixels a mm) the default Cusick picture (436 x 324 mm with its
  * legend) is 2575 x 1914 pixels, about 0.5 MB, enough to read a fold's
- * node marker (1.6 mm) and the legend's 3 mm text.  The background is the
- * SVG's own white rectangle.
+ * node marker (1.6 mm) and the legend's 3 mm text.  A larger picture is
+ * drawn at fewer dots an inch, its longer side DRAPE_PNG_MAX_SIDE pixels
+ * (the table's, 980 x 870 mm, would be 5799 x 5153 pixels at 150 dpi: a
+ * 120 MB image in memory for a 0.5 MB file).  The background is the SVG's own white rectangle.
  *
  * librsvg's calls: rsvg_handle_new_from_data, rsvg_handle_set_dpi,
  * rsvg_handle_get_intrinsic_size_in_pixels (2.52), rsvg_handle_render_document
@@ -48,8 +50,14 @@ int drape_png_from_svg(const char *svg, size_t len, FILE *f, const char *path, d
     }
     rsvg_handle_set_dpi(h, DRAPE_PNG_DPI);
     double w = 0.0, hgt = 0.0;
-    if (!rsvg_handle_get_intrinsic_size_in_pixels(h, &w, &hgt) || !(w >= 1.0) || !(hgt >= 1.0) ||
-        w > DRAPE_PNG_MAX_PX || hgt > DRAPE_PNG_MAX_PX) {
+    int sized = rsvg_handle_get_intrinsic_size_in_pixels(h, &w, &hgt);
+    double longer = w > hgt ? w : hgt;
+    if (sized && longer > DRAPE_PNG_MAX_SIDE) { /* a larger scene: fewer dots an inch */
+        rsvg_handle_set_dpi(h, DRAPE_PNG_DPI * DRAPE_PNG_MAX_SIDE / longer);
+        sized = rsvg_handle_get_intrinsic_size_in_pixels(h, &w, &hgt);
+    }
+    if (!sized || !(w >= 1.0) || !(hgt >= 1.0) || w > DRAPE_PNG_MAX_SIDE + 1.0 ||
+        hgt > DRAPE_PNG_MAX_SIDE + 1.0) {
         drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL,
                         "the picture has no usable size (%g x %g pixels)", w, hgt);
         goto out;

@@ -25,6 +25,9 @@
 
 #define SVG_MARGIN_MM 12.0
 #define SVG_LEGEND_MM 100.0 /* legend column width */
+/* half extent of the drawing up to which the legend keeps its size in mm
+ * (the Cusick test's 30 cm specimen with its margin: 162 mm) */
+#define SVG_LEGEND_REF_MM 170.0
 #define SVG_MAX_NODES 64
 
 /* A distinct hue per specimen, evenly spread (golden angle). */
@@ -52,20 +55,25 @@ static void text_escaped(FILE *f, const char *s)
 int drape_svg_shadow_write(FILE *f, const drape_svg_scene *sc,
                            const drape_svg_specimen *sp, int n)
 {
-    /* half extent of the drawing, mm */
-    double half = sc->table ? 0.5 * 1e3 * hypot(sc->width_m, sc->height_m)
+    /* half extent of the drawing, mm: the specimen at rest (the table's
+     * rectangle: its longer side), or an outline that reaches beyond it */
+    double half = sc->table ? 0.5 * 1e3 * fmax(sc->width_m, sc->height_m)
                             : 0.5 * 1e3 * sc->specimen_d_m;
     for (int k = 0; k < n; k++)
         for (int j = 0; sp[k].r && j < sp[k].n; j++)
             if (1e3 * sp[k].r[j] > half) half = 1e3 * sp[k].r[j];
     half += SVG_MARGIN_MM;
+    /* the legend grows with a drawing larger than the Cusick test's, so
+     * that it keeps its size against the drawing (in a PNG too) */
+    double ls = fmax(1.0, half / SVG_LEGEND_REF_MM);
     /* the legend column fits its bold 4 mm title (about 2.6 mm a character) */
     double legend = SVG_LEGEND_MM;
     size_t tl = 0;
     for (const char *c = sc->title; c && *c; c++) tl += ((unsigned char)*c & 0xC0) != 0x80;
     if (8.0 + 2.6 * (double)tl > legend) legend = 8.0 + 2.6 * (double)tl;
+    legend *= ls;
     double w = 2.0 * half + legend, h = 2.0 * half;
-    if (h < 80.0) h = 80.0;
+    if (h < 80.0 * ls) h = 80.0 * ls;
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" "
                "width=\"%.1fmm\" height=\"%.1fmm\" viewBox=\"%.2f %.2f %.2f %.2f\">\n",
@@ -117,9 +125,11 @@ int drape_svg_shadow_write(FILE *f, const drape_svg_scene *sc,
         }
     }
     fputs("</g>\n", f);
-    /* legend */
-    double lx = half + 4.0, ly = -half + 8.0;
-    fprintf(f, "<g class=\"legend\" font-family=\"sans-serif\" font-size=\"4\" fill=\"black\">\n");
+    /* legend: at the drawing's top right, its own units scaled by ls */
+    double lx = 0.0, ly = 0.0;
+    fprintf(f, "<g class=\"legend\" transform=\"translate(%.2f %.2f) scale(%.4g)\" "
+               "font-family=\"sans-serif\" font-size=\"4\" fill=\"black\">\n",
+            half + 4.0 * ls, -half + 8.0 * ls, ls);
     fprintf(f, "<text x=\"%.2f\" y=\"%.2f\" font-weight=\"bold\">", lx, ly);
     text_escaped(f, sc->title);
     fputs("</text>\n", f);

@@ -151,16 +151,14 @@ static double svg_root_num(const char *path, const char *attr)
 }
 
 /* shadow.png is shadow.svg rendered: its size is the SVG's in mm at
- * DRAPE_PNG_DPI, the margin is white, the support disk at the centre is
+ * DRAPE_PNG_DPI (150) or, for a picture larger than 3000 pixels, at the
+ * dots an inch that make its longer side 3000, the margin is white, the support disk at the centre is
  * grey under the translucent shadows, and the legend's histogram bars
  * (#46a) are there.  A directory in its way is refused before the run. */
-START_TEST(test_ensemble_png)
+/* Check DIR/shadow.png against DIR/shadow.svg (above). */
+static void check_png(const char *dir)
 {
-    char dir[600], args[1200], svg[700], png[700], cmd[2000];
-    snprintf(dir, sizeof dir, "%s/ens-png", tu_scratch_dir());
-    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
-             "--specimens 3 -j 1 --out %s", dir);
-    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    char svg[700], png[700];
     snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
     snprintf(png, sizeof png, "%s/shadow.png", dir);
     double w_mm = svg_root_num(svg, "width"), h_mm = svg_root_num(svg, "height");
@@ -170,7 +168,8 @@ START_TEST(test_ensemble_png)
     ck_assert_msg(cairo_surface_status(s) == CAIRO_STATUS_SUCCESS, "%s: %s", png,
                   cairo_status_to_string(cairo_surface_status(s)));
     int W = cairo_image_surface_get_width(s), H = cairo_image_surface_get_height(s);
-    double px_mm = 150.0 / 25.4;
+    /* 150 dpi, or fewer so that the longer side is at most 3000 pixels */
+    double px_mm = fmin(150.0 / 25.4, 3000.0 / fmax(w_mm, h_mm));
     ck_assert_msg(fabs(W - w_mm * px_mm) <= 1.0 && fabs(H - h_mm * px_mm) <= 1.0,
                   "%d x %d pixels for %g x %g mm", W, H, w_mm, h_mm);
     ck_assert(cairo_image_surface_get_format(s) == CAIRO_FORMAT_RGB24 ||
@@ -196,6 +195,21 @@ START_TEST(test_ensemble_png)
     /* each bar is 3.5 mm high and at least 30 / 3 mm long */
     ck_assert_msg(bars >= (long)(0.8 * 3.5 * 10.0 * px_mm * px_mm), "%ld bar pixels", bars);
     cairo_surface_destroy(s);
+}
+
+START_TEST(test_ensemble_png)
+{
+    char dir[600], args[1200], cmd[2000];
+    snprintf(dir, sizeof dir, "%s/ens-png", tu_scratch_dir());
+    /* the table's picture is larger than 3000 pixels at 150 dpi */
+    snprintf(args, sizeof args, "run -q ../scenes/table.yaml --spacing 4cm --method static "
+             "--specimens 1 --out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    check_png(dir);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --method static "
+             "--specimens 3 -j 1 --out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    check_png(dir);
 
     snprintf(cmd, sizeof cmd, "rm -rf %s && mkdir -p %s/shadow.png", dir, dir);
     ck_assert_int_eq(system(cmd), 0);

@@ -192,12 +192,13 @@ int drape_svg_shadow_write(FILE *f, const drape_svg_scene *sc,
                            const drape_svg_specimen *sp, int n);
 
 /* The same picture as PNG (output_png.c): the SVG text svg[0..len)
- * rendered by librsvg at DRAPE_PNG_DPI (its size in mm from the SVG) and
- * encoded by cairo, written to f.  path only names the file in errors.
- * Returns 0, or -1 with err set (an SVG librsvg cannot read, a size above
- * DRAPE_PNG_MAX_PX, a write error). */
+ * rendered by librsvg at DRAPE_PNG_DPI (its size in mm from the SVG), or
+ * at fewer dots an inch where its longer side would exceed
+ * DRAPE_PNG_MAX_SIDE pixels, and encoded by cairo, written to f.  path
+ * only names the file in errors.  Returns 0, or -1 with err set (an SVG
+ * librsvg cannot read or that has no size, a write error). */
 #define DRAPE_PNG_DPI 150.0
-#define DRAPE_PNG_MAX_PX 16384.0
+#define DRAPE_PNG_MAX_SIDE 3000.0
 int drape_png_from_svg(const char *svg, size_t len, FILE *f, const char *path,
                        drape_error *err);
 
