@@ -49,6 +49,9 @@ typedef struct gsl_state {
     double *Jsp;    /* nnz: sparse Jacobian values (msbdf) */
     double h0;      /* first trial step */
     double t_stop;
+    long accepted;  /* accepted steps since the last (re)init: GSL's
+                       evolve->count also counts the attempts the error
+                       test rejected */
 } gsl_state;
 
 static int gsl_rhs(double t, const double y[], double dydt[], void *p)
@@ -195,6 +198,7 @@ static int gsl_reinit(void *st, double t0, const double *y0, drape_error *err)
     int rc = gsl_odeiv2_driver_reset_hstart(s->d, s->h0);
     if (rc != GSL_SUCCESS) return gsl_fail(s, rc, err);
     s->t = t0;
+    s->accepted = 0;
     memcpy(s->y, y0, sizeof(double) * (size_t)s->ode->dim);
     return 0;
 }
@@ -209,9 +213,13 @@ static int gsl_step_to(void *st, double t_out, drape_step_mode mode, double *t,
     if (bound > s->t) {
         if (mode == DRAPE_STEP_NORMAL) {
             rc = gsl_odeiv2_driver_apply(s->d, &s->t, bound, s->y);
+            /* d->n: the driver's accepted steps, less the one after which
+             * it found its step limit exceeded (GSL 2.7 driver.c) */
+            s->accepted += (long)s->d->n + (rc == GSL_EMAXITER || rc == GSL_ENOPROG);
         } else {
             gsl_odeiv2_driver *d = s->d;
             rc = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, d->sys, &s->t, bound, &d->h, s->y);
+            s->accepted += rc == GSL_SUCCESS;
         }
     }
     *t = s->t;
@@ -237,7 +245,7 @@ static void gsl_stats(const void *st, drape_integrator_stats *r)
     memset(r, 0, sizeof *r);
     r->switches = -1;
     r->energy_rescales = -1;
-    r->steps = (long)s->d->e->count;
+    r->steps = s->accepted; /* not e->count: that includes rejected attempts */
     r->err_test_fails = (long)s->d->e->failed_steps;
     r->rhs_evals = s->ode->n_rhs;
     r->jac_evals = s->ode->n_jac;

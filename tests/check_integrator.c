@@ -628,6 +628,59 @@ START_TEST(test_one_step_dense_reinit)
 }
 END_TEST
 
+/* "steps" counts accepted steps (docs/integrators.md, statistics) for GSL
+ * too.  Independent count: the calls of DRAPE_STEP_ONE, each of which
+ * takes exactly one accepted step (gsl_odeiv2_evolve_apply); NORMAL mode
+ * to the same bound takes the very same steps (same state to the bit).
+ * GSL's evolve->count also counts the attempts its error test rejected,
+ * which the scene has (err_test_fails > 0): reported as steps before. */
+START_TEST(test_gsl_steps_accepted)
+{
+    tf_scene t;
+    ts_build(&t, 0, 0);
+    size_t n3 = 3 * (size_t)t.L->n;
+    double *xa = malloc(sizeof(double) * n3), *xb = malloc(sizeof(double) * n3);
+    const char *names[] = {"gsl-msbdf", "gsl-rk8pd"};
+    for (int k = 0; k < 2; k++) {
+        drape_integrator_opts o;
+        drape_integrator_opts_default(&o);
+        o.rtol = 1e-6;
+        o.atol = 1e-9;
+        o.t_stop = 0.1;
+        drape_error err;
+        drape_error_clear(&err);
+        drape_integrator *A = drape_integrator_new(t.m, names[k], &o, &err);
+        drape_integrator *B = drape_integrator_new(t.m, names[k], &o, &err);
+        ck_assert_msg(A && B, "%s", err.msg);
+        long calls = 0;
+        while (drape_integrator_time(A) < 0.1) {
+            ck_assert_msg(drape_integrator_step_to(A, 0.1, DRAPE_STEP_ONE, &err) == 0, "%s", err.msg);
+            calls++;
+        }
+        ck_assert_msg(drape_integrator_step_to(B, 0.1, DRAPE_STEP_NORMAL, &err) == 0, "%s", err.msg);
+        drape_integrator_state(A, xa, NULL);
+        drape_integrator_state(B, xb, NULL);
+        ck_assert_double_eq(max_abs_diff(xa, xb, n3), 0.0);
+        drape_integrator_stats sa, sb;
+        drape_integrator_get_stats(A, &sa);
+        drape_integrator_get_stats(B, &sb);
+        ck_assert_msg(sa.err_test_fails > 0, "%s: no rejected step, the test proves nothing", names[k]);
+        ck_assert_msg(sa.steps == calls && sb.steps == calls,
+                      "%s: %ld accepted steps, reported %ld (ONE) and %ld (NORMAL)", names[k],
+                      calls, sa.steps, sb.steps);
+        /* counters restart with the integrator */
+        ck_assert_int_eq(drape_integrator_reinit(B, 0.0, t.L->xinit, NULL, &err), 0);
+        drape_integrator_get_stats(B, &sb);
+        ck_assert_int_eq(sb.steps, 0);
+        drape_integrator_free(A);
+        drape_integrator_free(B);
+    }
+    free(xa);
+    free(xb);
+    tf_free(&t);
+}
+END_TEST
+
 Suite *integrator_suite(void)
 {
     Suite *s = suite_create("integrator");
@@ -638,6 +691,7 @@ Suite *integrator_suite(void)
     tcase_add_test(tc, test_alloc_failures);
     tcase_add_test(tc, test_observer_schedule);
     tcase_add_test(tc, test_one_step_dense_reinit);
+    tcase_add_test(tc, test_gsl_steps_accepted);
     suite_add_tcase(s, tc);
     tc = tcase_create("accuracy");
     tcase_set_timeout(tc, 120);
