@@ -49,6 +49,7 @@ typedef struct gsl_state {
     double *Jsp;    /* nnz: sparse Jacobian values (msbdf) */
     double h0;      /* first trial step */
     double t_stop;
+    long max_steps; /* accepted steps allowed per step_to call (NORMAL) */
     long accepted;  /* accepted steps since the last (re)init: GSL's
                        evolve->count also counts the attempts the error
                        test rejected */
@@ -169,9 +170,7 @@ static void *gsl_alloc(int implicit, const char *name, drape_ode *ode,
         &s->sys, implicit ? gsl_odeiv2_step_msbdf : gsl_odeiv2_step_rk8pd, s->h0,
         1.0, o->rtol, 1.0, 0.0, ode->atol);
     if (!s->d) goto nomem;
-    gsl_odeiv2_driver_set_nmax(s->d, (unsigned long)(o->max_steps > 0
-                                                         ? o->max_steps
-                                                         : DRAPE_INTEGRATOR_MAX_STEPS_DEFAULT));
+    s->max_steps = o->max_steps > 0 ? o->max_steps : DRAPE_INTEGRATOR_MAX_STEPS_DEFAULT;
     return s;
 nomem:
     drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL,
@@ -210,14 +209,25 @@ static int gsl_step_to(void *st, double t_out, drape_step_mode mode, double *t,
     int rc = GSL_SUCCESS;
     double bound = t_out;
     if (s->t_stop > 0.0 && (mode == DRAPE_STEP_ONE || bound > s->t_stop)) bound = s->t_stop;
+    gsl_odeiv2_driver *d = s->d;
     if (bound > s->t) {
         if (mode == DRAPE_STEP_NORMAL) {
-            rc = gsl_odeiv2_driver_apply(s->d, &s->t, bound, s->y);
-            /* d->n: the driver's accepted steps, less the one after which
-             * it found its step limit exceeded (GSL 2.7 driver.c) */
-            s->accepted += (long)s->d->n + (rc == GSL_EMAXITER || rc == GSL_ENOPROG);
+            /* gsl_odeiv2_driver_apply's loop (its hmin 0 and hmax DBL_MAX
+             * never act), with the step limit of the other backends: at
+             * most max_steps accepted steps.  The driver's nmax let
+             * nmax + 1 steps succeed and failed after nmax + 2. */
+            long taken = 0;
+            while (s->t < bound) {
+                if (taken >= s->max_steps) {
+                    rc = GSL_EMAXITER;
+                    break;
+                }
+                rc = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, d->sys, &s->t, bound, &d->h, s->y);
+                if (rc != GSL_SUCCESS) break;
+                taken++;
+            }
+            s->accepted += taken;
         } else {
-            gsl_odeiv2_driver *d = s->d;
             rc = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, d->sys, &s->t, bound, &d->h, s->y);
             s->accepted += rc == GSL_SUCCESS;
         }

@@ -681,6 +681,65 @@ START_TEST(test_gsl_steps_accepted)
 }
 END_TEST
 
+/* max_steps is the number of steps a step_to call may take (integrator.h;
+ * docs/integrators.md: per output interval), as for the SUNDIALS backends.
+ * Independent expectation: the time and state after max_steps steps of
+ * DRAPE_STEP_ONE (the same steps, to the bit, as above).  GSL's driver
+ * nmax let max_steps + 1 steps succeed and failed after max_steps + 2. */
+START_TEST(test_gsl_max_steps)
+{
+    tf_scene t;
+    ts_build(&t, 0, 0);
+    size_t n3 = 3 * (size_t)t.L->n;
+    double *xa = malloc(sizeof(double) * n3), *xb = malloc(sizeof(double) * n3);
+    const char *names[] = {"gsl-msbdf", "gsl-rk8pd"};
+    const long N = 10;
+    for (int k = 0; k < 2; k++) {
+        drape_integrator_opts o;
+        drape_integrator_opts_default(&o);
+        o.rtol = 1e-6;
+        o.atol = 1e-9;
+        o.t_stop = 1.0;
+        o.max_steps = N;
+        drape_error err;
+        drape_error_clear(&err);
+        drape_integrator *A = drape_integrator_new(t.m, names[k], &o, &err);
+        drape_integrator *B = drape_integrator_new(t.m, names[k], &o, &err);
+        ck_assert_msg(A && B, "%s", err.msg);
+        double tn[12];
+        for (int n = 0; n < 12; n++) {
+            ck_assert_msg(drape_integrator_step_to(B, 1.0, DRAPE_STEP_ONE, &err) == 0, "%s", err.msg);
+            tn[n] = drape_integrator_time(B);
+            if (n == N - 1) drape_integrator_state(B, xb, NULL);
+        }
+        ck_assert_double_lt(tn[11], 1.0);
+        /* 1 s needs far more than N steps: fails after exactly N */
+        ck_assert_int_eq(drape_integrator_step_to(A, 1.0, DRAPE_STEP_NORMAL, &err), -1);
+        ck_assert_msg(err.kind == DRAPE_E_NUMERIC && strstr(err.msg, "GSL_EMAXITER"), "%s", err.msg);
+        drape_integrator_stats st;
+        drape_integrator_get_stats(A, &st);
+        ck_assert_msg(drape_integrator_time(A) == tn[N - 1] && st.steps == N,
+                      "%s: stopped at t = %.17g after %ld steps; %ld steps end at %.17g",
+                      names[k], drape_integrator_time(A), st.steps, N, tn[N - 1]);
+        drape_integrator_state(A, xa, NULL);
+        ck_assert_double_eq(max_abs_diff(xa, xb, n3), 0.0);
+        /* an interval of exactly N + 1 steps is refused, one of N is not */
+        drape_error_clear(&err);
+        ck_assert_int_eq(drape_integrator_reinit(A, 0.0, t.L->xinit, NULL, &err), 0);
+        ck_assert_int_eq(drape_integrator_step_to(A, tn[N], DRAPE_STEP_NORMAL, &err), -1);
+        drape_error_clear(&err);
+        ck_assert_int_eq(drape_integrator_reinit(A, 0.0, t.L->xinit, NULL, &err), 0);
+        ck_assert_msg(drape_integrator_step_to(A, tn[N - 1], DRAPE_STEP_NORMAL, &err) == 0, "%s", err.msg);
+        ck_assert_double_eq(drape_integrator_time(A), tn[N - 1]);
+        drape_integrator_free(A);
+        drape_integrator_free(B);
+    }
+    free(xa);
+    free(xb);
+    tf_free(&t);
+}
+END_TEST
+
 Suite *integrator_suite(void)
 {
     Suite *s = suite_create("integrator");
@@ -692,6 +751,7 @@ Suite *integrator_suite(void)
     tcase_add_test(tc, test_observer_schedule);
     tcase_add_test(tc, test_one_step_dense_reinit);
     tcase_add_test(tc, test_gsl_steps_accepted);
+    tcase_add_test(tc, test_gsl_max_steps);
     suite_add_tcase(s, tc);
     tc = tcase_create("accuracy");
     tcase_set_timeout(tc, 120);
