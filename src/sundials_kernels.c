@@ -6,7 +6,10 @@
  * per element), and every solver vector is an NVECTOR_SERIAL clone of the
  * state vector.  These replacements of the hot operations compute the same
  * expressions in the same order (no reassociation: -std=c99 keeps FP
- * contraction off), so results are unchanged; they are installed on the
+ * contraction off), so results are unchanged, except kv_linearsum with
+ * a = +-b: a x + b y where NVECTOR_SERIAL computes a (x +- y), which rounds
+ * differently (arkode-dirk's results depend on it; docs/integrators.md,
+ * "Debian's libsundials"); they are installed on the
  * state vector before the solver clones it (N_VClone copies the ops
  * table).  The fused operations (N_VLinearCombination, N_VScaleAddMulti,
  * N_VDotProdMulti), which NVECTOR_SERIAL leaves off by default, save whole
