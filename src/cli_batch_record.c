@@ -86,16 +86,9 @@ unsigned long long drape_cli_batch_file_sum(const char *given)
     drape_error e;
     drape_error_clear(&e);
     if (drape_cli_data_find(given, path, sizeof path, &e) != 0) return 0;
-    size_t len = 0;
-    char *text = drape_cli_read_file(path, DRAPE_YDOC_MAX_BYTES, &len, &e);
-    if (!text) return 0;
-    unsigned long long h = 14695981039346656037ULL;
-    for (size_t i = 0; i < len; i++) {
-        h ^= (unsigned char)text[i];
-        h *= 1099511628211ULL;
-    }
-    drape_free(text);
-    return h ? h : 1;
+    unsigned long long h = 0;
+    if (drape_cli_file_sum(path, DRAPE_YDOC_MAX_BYTES, &h, &e) != 0) return 0;
+    return h;
 }
 
 /* the sum recorded for a row's fabric_file (0: none recorded) */

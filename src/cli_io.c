@@ -86,6 +86,22 @@ fail:
 
 /* ---- atomic replacement ------------------------------------------------------ */
 
+int drape_cli_file_sum(const char *path, size_t max, unsigned long long *sum,
+                       drape_error *err)
+{
+    size_t len = 0;
+    char *text = drape_cli_read_file(path, max, &len, err);
+    if (!text) return -1;
+    unsigned long long h = 14695981039346656037ULL;
+    for (size_t i = 0; i < len; i++) {
+        h ^= (unsigned char)text[i];
+        h *= 1099511628211ULL;
+    }
+    drape_free(text);
+    *sum = h ? h : 1;
+    return 0;
+}
+
 int drape_cli_afile_open(drape_cli_afile *a, const char *path, drape_error *err)
 {
     memset(a, 0, sizeof *a);

@@ -36,6 +36,13 @@ int drape_cli_check_target(const char *dir, const char *name, drape_error *err);
 char *drape_cli_read_file(const char *path, size_t max, size_t *len,
                           drape_error *err);
 
+/* FNV-1a (64 bits) of a file's bytes (at most max): whether an input
+ * changed since it was recorded (batch's inputs.sum, an ensemble's
+ * manifest), not a digest against tampering.  Never 0 for a file read.
+ * 0, or -1 and err (E_IO naming the file, E_NOMEM). */
+int drape_cli_file_sum(const char *path, size_t max, unsigned long long *sum,
+                       drape_error *err);
+
 /* Read a file of at most max bytes that holds one JSON value (blanks and
  * // or / * * / comments around it, as ARCSim's files have): the value
  * (caller frees with json_object_put), or NULL and err: E_SYNTAX at
