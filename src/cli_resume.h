@@ -44,7 +44,7 @@ void drape_cli_resume_add_previous(const drape_h5_checkpoint *c, const char *key
 /* The run's options and resume state for /run (strings point into s,
  * res, or static text; nums into the caller's array). */
 typedef struct run_kv {
-    drape_kv kv[32];
+    drape_kv kv[34]; /* (the caller may add ensemble_id) */
     int n;
     char scene_abs[PATH_MAX + DRAPE_ERROR_FILE_MAX], fabric_abs[PATH_MAX + DRAPE_ERROR_FILE_MAX];
 } run_kv;

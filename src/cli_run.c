@@ -488,6 +488,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     }
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
+        /* a single run in an ensemble's directory: DIR is this run's now
+         * (its shadow.svg replaces the ensemble's), and --resume DIR is
+         * its (docs/outputs.md) */
+        if (!child && !resume_dir) {
+            char man[4200];
+            snprintf(man, sizeof man, "%s/" DRAPE_ENSEMBLE_MANIFEST, out_dir);
+            unlink(man);
+        }
         if (!child && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
             (drape_cli_check_target(out_dir, "shadow.svg", &err) != 0 ||
              drape_cli_check_target(out_dir, "shadow.png", &err) != 0))
@@ -779,6 +787,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         if (!method_static) {
             if (!(rk = drape_calloc(1, sizeof *rk))) goto nomem;
             drape_cli_run_kv_fill(rk, scene_path, &s, &so, &res, rc.frame, stop_signal);
+            if (ra->ensemble_id) /* an ensemble's specimen: whose (added) */
+                rk->kv[rk->n++] = (drape_kv){"ensemble_id", ra->ensemble_id, 0.0};
             fin.run = rk->kv;
             fin.n_run = rk->n;
         }
@@ -838,7 +848,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         int sig = stop_signal;
         if (rc.progress) fputc('\n', stderr); /* end the progress line */
         if (child)
-            ; /* a specimen: the ensemble reports it (and that it is not resumable) */
+            ; /* a specimen: the ensemble reports it (and how to resume it) */
         else if (method_static)
             fprintf(stderr, "drape: run interrupted by %s during the static solve; nothing "
                     "written\n", signal_name(sig));

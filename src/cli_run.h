@@ -12,6 +12,11 @@
 #include "drape/output.h"
 #include "drape/scene.h"
 
+/* An ensemble's manifest in its --out DIR (cli_specimens_record.c) */
+#define DRAPE_ENSEMBLE_MANIFEST "ensemble.json"
+
+#define RUN_GIVEN_MAX 48 /* more than the options of drape_cli_run_option */
+
 /* The command line of `drape run`, parsed (0 / NULL = not given: the
  * scene's value). */
 typedef struct run_args {
@@ -37,7 +42,19 @@ typedef struct run_args {
     int check_only;           /* load, check and build the model, then stop
                                  (an ensemble checks its input once before
                                  it starts its specimens) */
+    const char *ensemble_id;  /* an ensemble's specimen with --out: its
+                                 ensemble's id, stored in the checkpoint's
+                                 /run (a resumed ensemble continues only its
+                                 own specimens' checkpoints) */
+    /* the options drape_cli_run_option took, as given on the command line
+     * (long name without dashes, text; the last of a repeated option): an
+     * ensemble records them in its manifest (cli_specimens_record.c) */
+    const char *given_name[RUN_GIVEN_MAX], *given_text[RUN_GIVEN_MAX];
+    int n_given;
 } run_args;
+
+/* Every field not given: 0, NULL, or the "the scene's" value. */
+void drape_cli_run_args_init(run_args *ra);
 
 /* Set the value of one of `drape run`'s options in ra, checked as run
  * checks it: name with its dashes ("--rtol"), text as given (units
@@ -63,6 +80,11 @@ int drape_cli_run_one(const run_args *a, run_child *child);
  * N specimens in child processes (seeds seed + k), -j at a time, and
  * their statistics.  Returns the exit status. */
 int drape_cli_specimens_run(const run_args *a);
+
+/* `drape run --resume DIR` of an ensemble's directory (DIR/ensemble.json,
+ * cli_specimens_record.c): the ensemble continued, a->csv, a->quiet and
+ * a->jobs as given now.  Returns the exit status. */
+int drape_cli_specimens_resume(const run_args *a);
 
 /* Write DIR/shadow.svg: the top view of the specimens' shadows (scene s,
  * n specimens), with the result r's statistics in its legend. */

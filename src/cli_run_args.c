@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "cli_data.h"
@@ -323,6 +324,18 @@ int drape_cli_run_option(run_args *ra, const char *name, const char *text, char 
 #undef IS
 #undef WHY
 
+void drape_cli_run_args_init(run_args *ra)
+{
+    memset(ra, 0, sizeof *ra);
+    ra->method = DRAPE_METHOD_DEFAULT;
+    ra->fall_swing = -1.0;
+    ra->fall_tol = -1.0;
+    ra->fall_fold_time = -1.0;
+    ra->fall_retry = -1.0;
+    ra->damping_shear = -1.0;
+    ra->jobs = 0; /* one per core */
+}
+
 int drape_cli_run(int argc, char **argv)
 {
     /* the options that set a value of the run: drape_cli_run_option */
@@ -361,14 +374,7 @@ int drape_cli_run(int argc, char **argv)
     const char *fabric_path = NULL, *out_dir = NULL, *resume_dir = NULL, *run_opt = NULL;
     int csv = 0, quiet = 0, c, li;
     run_args ra;
-    memset(&ra, 0, sizeof ra);
-    ra.method = DRAPE_METHOD_DEFAULT;
-    ra.fall_swing = -1.0;
-    ra.fall_tol = -1.0;
-    ra.fall_fold_time = -1.0;
-    ra.fall_retry = -1.0;
-    ra.damping_shear = -1.0;
-    ra.jobs = 0; /* one per core */
+    drape_cli_run_args_init(&ra);
     while ((c = getopt_long(argc, argv, "qhj:", opts, &li)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;
@@ -379,6 +385,14 @@ int drape_cli_run(int argc, char **argv)
             snprintf(name, sizeof name, "--%s", opts[li].name);
             if (drape_cli_run_option(&ra, name, optarg, why, sizeof why) != 0)
                 return usage_error("%s%s", why, "");
+            /* as given, for an ensemble's manifest (the last of a
+             * repeated option, as it is the one that counts) */
+            int g = 0;
+            while (g < ra.n_given && strcmp(ra.given_name[g], opts[li].name) != 0) g++;
+            if (g == RUN_GIVEN_MAX) return usage_error("run: too many options%s%s", "", "");
+            ra.given_name[g] = opts[li].name;
+            ra.given_text[g] = optarg;
+            if (g == ra.n_given) ra.n_given++;
             break;
         }
         case 'j':
@@ -403,11 +417,13 @@ int drape_cli_run(int argc, char **argv)
     }
     if (argc - optind > 1) return usage_error("run: one scene at a time, got `%s' and `%s'", argv[optind], argv[optind + 1]);
     if (resume_dir && optind < argc)
-        return usage_error("--resume: no scene file with it (the run's is stored in %s/drape.h5), got `%s'",
+        return usage_error("--resume: no scene file with it (the run's is stored in %s: drape.h5, "
+                           "or ensemble.json for an ensemble), got `%s'",
                            resume_dir, argv[optind]);
     if (resume_dir && run_opt)
         return usage_error("--resume: only --format, -q and -j go with it (the run's options are "
-                           "stored in %s/drape.h5), got `%s'", resume_dir, run_opt);
+                           "stored in %s: drape.h5, or ensemble.json for an ensemble), got `%s'",
+                           resume_dir, run_opt);
     /* the default scene and paths not found here: the data directories
      * (cli_data.h; a resumed run's paths are stored absolute) */
     char scene_buf[4096], fabric_buf[4096];
@@ -429,6 +445,17 @@ int drape_cli_run(int argc, char **argv)
     ra.resume_dir = resume_dir;
     ra.csv = csv;
     ra.quiet = quiet;
-    if (resume_dir) return drape_cli_run_one(&ra, NULL);
+    if (resume_dir) {
+        /* an ensemble's directory has its manifest (docs/ensemble.md); a
+         * single run's, its checkpoint DIR/drape.h5 */
+        char manifest[4200];
+        snprintf(manifest, sizeof manifest, "%s/" DRAPE_ENSEMBLE_MANIFEST, resume_dir);
+        char h5[4200], first[4200];
+        snprintf(h5, sizeof h5, "%s/drape.h5", resume_dir);
+        snprintf(first, sizeof first, "%s/specimen-001", resume_dir);
+        if (access(manifest, F_OK) == 0 || (access(h5, F_OK) != 0 && access(first, F_OK) == 0))
+            return drape_cli_specimens_resume(&ra); /* (refused without a manifest) */
+        return drape_cli_run_one(&ra, NULL);
+    }
     return drape_cli_specimens_run(&ra);
 }

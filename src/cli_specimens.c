@@ -18,8 +18,16 @@
  * statistic; the run fails (exit 4) only when none produced a result.
  * SIGINT/SIGTERM: no new specimen starts, the running ones stop at their
  * next evaluation (they are sent the signal too), the result says
- * status interrupted and exits 128 + the signal; an ensemble cannot be
- * resumed (its specimens are short).
+ * status interrupted and exits 128 + the signal.
+ *
+ * With --out DIR the ensemble keeps a record there (cli_specimens.h,
+ * cli_specimens_record.c): its manifest, written before the first
+ * specimen starts, and each finished specimen's result as it comes in.
+ * `drape run --resume DIR` continues it through this same driver: the
+ * stored specimens are read back, not run; a dynamic specimen that was
+ * interrupted continues from its checkpoint (DIR/specimen-NNN/drape.h5,
+ * the single run's --resume); the others run from the start.  Without
+ * --out an ensemble cannot be resumed.
  */
 #include "cli_run.h"
 
@@ -38,6 +46,7 @@
 
 #include "cli.h"
 #include "cli_io.h"
+#include "cli_specimens.h"
 #include "drape/alloc.h"
 #include "drape/ensemble.h"
 #include "drape/fabric.h"
@@ -100,6 +109,9 @@ typedef struct child {
     char *buf;           /* what it sent */
     size_t len, cap;
     int done, exit_status;
+    int started;         /* launched in this part of the ensemble */
+    int stored;          /* its result read back from DIR (--resume) */
+    int from_ck;         /* continues from its checkpoint (--resume) */
     double cpu_s;
     drape_cli_result res;
     int have_res;
@@ -122,7 +134,12 @@ static void on_signal(int sig)
     ens_signals++;
 }
 
-static int launch(const run_args *a, child *c, unsigned long seed, const char *out_dir)
+/* Start specimen c->k (seed): a new run, or with from_ck the run
+ * continued from its checkpoint in its directory.  id: the ensemble's
+ * (with --out), stored in its checkpoint; quiet_all: no specimen prints
+ * the loaders' warnings (a resumed ensemble, as a resumed run). */
+static int launch(const run_args *a, child *c, unsigned long seed, const char *out_dir,
+                  const char *id, int from_ck, int quiet_all)
 {
     int fd;
     pid_t pid = drape_cli_fork_pipe(&fd);
@@ -138,11 +155,13 @@ static int launch(const run_args *a, child *c, unsigned long seed, const char *o
         ca.seed = seed;
         ca.quiet = 1;
         ca.specimens = 1;
-        ca.no_warnings = c->k > 0; /* the first specimen prints them once */
+        ca.no_warnings = quiet_all || c->k > 0; /* the first specimen prints them once */
+        ca.ensemble_id = id;
         char dir[4200];
         if (out_dir) {
             snprintf(dir, sizeof dir, "%s/specimen-%03d", out_dir, c->k + 1);
             ca.out_dir = dir;
+            if (from_ck) ca.resume_dir = dir; /* its options are stored there */
         }
         FILE *o = fdopen(fd, "w");
         int st = 70;
@@ -205,6 +224,7 @@ static void parse_child(child *c)
         }
     }
     c->have_res = drape_cli_result_read(c->buf, &c->res) == 0 && c->res.n > 0;
+    if (sh) *sh = '@'; /* the text whole again (it may be stored) */
 }
 
 /* ---- the ensemble's result ---------------------------------------------------- */
@@ -253,8 +273,8 @@ typedef struct ens_ident {
 
 static void build_result(drape_cli_result *r, child *ch, int n, const child *first,
                          const drape_ensemble_stats *st, int n_failed, int interrupted,
-                         double wall_s, unsigned long seed0, drape_cli_specimen *spec,
-                         const ens_ident *id)
+                         double wall_s, double cpu_prev, unsigned long seed0,
+                         drape_cli_specimen *spec, const ens_ident *id)
 {
     memset(r, 0, sizeof *r);
     int all_eq = 1, n_ok = 0, all_min = 1, any_cert = 0;
@@ -291,7 +311,7 @@ static void build_result(drape_cli_result *r, child *ch, int n, const child *fir
         } else if (strcmp(key, "certified") == 0) {
             drape_cli_result_str(r, jkey, !any_cert ? NULL : all_min ? "minimum" : "saddle");
         } else if (strcmp(key, "cpu_s") == 0) {
-            drape_cli_result_num(r, jkey, drape_cli_cpu_s());
+            drape_cli_result_num(r, jkey, drape_cli_cpu_s() + cpu_prev);
         } else if (strcmp(key, "dc_sd") == 0) {
             drape_cli_result_num(r, jkey, st->dc_sd);
         } else if (strcmp(key, "dc_ci95") == 0) {
@@ -394,14 +414,67 @@ out:
     return rc;
 }
 
+/* ---- the record in DIR (--out) ------------------------------------------------- */
+
+/* A specimen whose result is kept: it is not run again by --resume (a
+ * numerical failure is deterministic; an error without a result, an
+ * interruption, are not kept). */
+static int spec_done(const child *c)
+{
+    return c->have_res && (spec_ok(c) || strcmp(spec_status(c), "failed") == 0);
+}
+
+/* --resume: the specimens of m read back (c->stored), or marked to
+ * continue from their checkpoints (c->from_ck).  Returns how many were
+ * read back. */
+static int read_back(const ens_record *m, child *ch, int n)
+{
+    int n_stored = 0;
+    for (int k = 0; k < n; k++) {
+        child *c = &ch[k];
+        int ex = 0;
+        double cpu = 0.0;
+        char *text = drape_cli_ens_result_load(m, k, &ex, &cpu);
+        if (text) {
+            c->buf = text;
+            c->len = strlen(text);
+            c->cap = c->len + 1;
+            parse_child(c);
+            if (spec_done(c)) {
+                c->stored = c->done = 1;
+                c->exit_status = ex;
+                c->cpu_s = cpu;
+                n_stored++;
+                continue;
+            }
+            fprintf(stderr, "drape: %s/specimen-%03d/" ENS_RESULT ": warning: not a result "
+                    "that can be used; the specimen runs again\n", m->dir, k + 1);
+            drape_free(c->buf);
+            drape_free(c->radii);
+            c->buf = NULL;
+            c->radii = NULL;
+            c->len = c->cap = 0;
+            c->n_radii = c->have_res = 0;
+        }
+        c->from_ck = drape_cli_ens_checkpoint(m, k, &c->cpu_s);
+    }
+    return n_stored;
+}
+
 /* ---- driver ------------------------------------------------------------------- */
 
 int drape_cli_specimens_run(const run_args *a)
+{
+    return drape_cli_specimens_drive(a, NULL);
+}
+
+int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
 {
     drape_error err;
     drape_error_clear(&err);
     drape_scene s;
     const char *scene_path = a->scene_path;
+    const int resuming = rm != NULL;
     /* the scene once here, for N and the seed; each child loads it again
      * (and prints its warnings) */
     if (drape_scene_load_flags(scene_path, a->fabric_path ? DRAPE_SCENE_LOAD_FABRIC_OVERRIDDEN : 0u,
@@ -423,6 +496,7 @@ int drape_cli_specimens_run(const run_args *a)
         int cst = drape_cli_run_one(&ca, NULL);
         if (cst != 0) return cst;
     }
+    const char *fabric_path = a->fabric_path ? a->fabric_path : s.fabric_path;
     /* the fabric's name for a result that no specimen finished (it loaded
      * above, so an error here is out of memory at most) */
     char fabric_name[DRAPE_FABRIC_NAME_MAX] = "";
@@ -430,8 +504,7 @@ int drape_cli_specimens_run(const run_args *a)
         drape_fabric *f = drape_malloc(sizeof *f);
         drape_error ferr;
         drape_error_clear(&ferr);
-        if (f && drape_fabric_load(a->fabric_path ? a->fabric_path : s.fabric_path, f, &ferr,
-                                   NULL, NULL) == 0)
+        if (f && drape_fabric_load(fabric_path, f, &ferr, NULL, NULL) == 0)
             memcpy(fabric_name, f->name, sizeof fabric_name);
         drape_free(f);
     }
@@ -451,7 +524,12 @@ int drape_cli_specimens_run(const run_args *a)
     }
     if (jobs > n) jobs = n;
     int progress = !a->quiet && isatty(STDERR_FILENO);
-    int status = 0, created_dir = 0, n_started = 0, n_running = 0, n_done = 0;
+    int status = 0, created_dir = 0, n_running = 0, n_done = 0, next = 0;
+    int n_stored = 0, n_kept = 0; /* read back; stored in this part */
+    double cpu_prev = 0.0, wall_prev = 0.0; /* of the parts before (--resume) */
+    ens_record own;
+    memset(&own, 0, sizeof own);
+    ens_record *m = rm;
     child *ch = drape_calloc((size_t)n, sizeof *ch);
     drape_cli_specimen *spec = drape_calloc((size_t)n, sizeof *spec);
     drape_svg_specimen *sv = drape_calloc((size_t)n, sizeof *sv);
@@ -462,8 +540,36 @@ int drape_cli_specimens_run(const run_args *a)
         drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
         goto fail;
     }
+    for (int k = 0; k < n; k++) {
+        ch[k].k = k;
+        ch[k].fd = -1;
+    }
+    if (resuming) {
+        if (m->n != n || m->seed0 != seed0) { /* (the manifest sets both) */
+            drape_error_set(&err, DRAPE_E_INTERNAL, m->path, 0, 0, NULL,
+                            "--resume: %d specimens from seed %lu, the manifest says %d from %lu",
+                            n, seed0, m->n, m->seed0);
+            goto fail;
+        }
+        n_done = n_stored = read_back(m, ch, n);
+        /* as a finished single run is refused: the result was printed */
+        if (n_stored == n && strcmp(m->status, "running") != 0 &&
+            strcmp(m->status, "interrupted") != 0) {
+            drape_error_set(&err, DRAPE_E_USAGE, m->path, 0, 0, NULL,
+                            "--resume: the ensemble ended with status %s and every specimen's "
+                            "result is stored: nothing to resume", m->status);
+            goto fail;
+        }
+        /* the time of the parts before; at least that of the specimens
+         * kept (a part killed outright did not record its own) */
+        double cpu_kept = 0.0;
+        for (int k = 0; k < n; k++)
+            if (ch[k].stored && ch[k].cpu_s > 0) cpu_kept += ch[k].cpu_s;
+        cpu_prev = m->cpu_s > cpu_kept ? m->cpu_s : cpu_kept;
+        wall_prev = m->wall_s;
+    }
     if (a->out_dir && drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0) goto fail;
-    if (a->out_dir && !a->no_warnings) { /* an earlier, larger ensemble's specimens */
+    if (a->out_dir && !a->no_warnings && !resuming) { /* an earlier, larger ensemble's specimens */
         char sd[4200];
         struct stat sst;
         int k = n + 1;
@@ -484,6 +590,15 @@ int drape_cli_specimens_run(const run_args *a)
         (drape_cli_check_target(a->out_dir, "shadow.svg", &err) != 0 ||
          drape_cli_check_target(a->out_dir, "shadow.png", &err) != 0))
         goto fail;
+    /* a new ensemble's manifest, before any specimen starts (results an
+     * earlier ensemble stored here are not this one's) */
+    if (a->out_dir && !resuming) {
+        if (drape_cli_ens_record_new(&own, a->out_dir, a, fabric_path, n, seed0, &err) != 0)
+            goto fail;
+        m = &own;
+        for (int k = 0; k < n; k++) drape_cli_ens_result_remove(m, k);
+        if (drape_cli_ens_record_write(m, &err) != 0) goto fail;
+    }
 
     struct sigaction sa, old_int, old_term;
     memset(&sa, 0, sizeof sa);
@@ -500,32 +615,35 @@ int drape_cli_specimens_run(const run_args *a)
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     int forwarded = 0, hard = 0;
-    while (n_done < n_started || (n_started < n && !ens_stop)) {
-        while (!ens_stop && n_started < n && n_running < jobs) {
-            child *c = &ch[n_started];
-            c->k = n_started;
-            c->fd = -1;
-            if (launch(a, c, seed0 + (unsigned long)n_started, a->out_dir) != 0) {
+    for (;;) {
+        while (next < n && ch[next].stored) next++;
+        if (n_running == 0 && (next >= n || ens_stop)) break;
+        while (!ens_stop && next < n && n_running < jobs) {
+            child *c = &ch[next];
+            if (launch(a, c, seed0 + (unsigned long)next, a->out_dir, m ? m->id : NULL,
+                       c->from_ck, resuming) != 0) {
                 drape_error_set(&err, DRAPE_E_IO, NULL, 0, 0, NULL,
-                                "cannot start a process for specimen %d: %s", n_started + 1,
+                                "cannot start a process for specimen %d: %s", next + 1,
                                 strerror(errno));
                 ens_stop = -1;
                 break;
             }
-            n_started++;
+            c->started = 1;
             n_running++;
+            next++;
+            while (next < n && ch[next].stored) next++;
         }
         if (n_running == 0) break;
         if (ens_stop > 0 && !forwarded) {
             /* a signal sent to this process alone (kill PID) reaches the
              * children too; from a terminal they had it already */
-            for (int k = 0; k < n_started; k++)
-                if (!ch[k].done) kill(ch[k].pid, (int)ens_stop);
+            for (int k = 0; k < n; k++)
+                if (ch[k].started && !ch[k].done) kill(ch[k].pid, (int)ens_stop);
             forwarded = 1;
         }
         if (ens_signals >= hard_at && !hard) { /* the user's "stop now" */
-            for (int k = 0; k < n_started; k++)
-                if (!ch[k].done) kill(ch[k].pid, SIGKILL);
+            for (int k = 0; k < n; k++)
+                if (ch[k].started && !ch[k].done) kill(ch[k].pid, SIGKILL);
             hard = 1;
         }
         /* a child's CPU time: what RUSAGE_CHILDREN gains when it is
@@ -539,15 +657,16 @@ int drape_cli_specimens_run(const run_args *a)
             if (errno == EINTR) continue;
             break;
         }
-        for (int k = 0; k < n_started; k++) {
+        for (int k = 0; k < n; k++) {
             child *c = &ch[k];
-            if (c->pid != pid || c->done) continue;
+            if (!c->started || c->pid != pid || c->done) continue;
             c->done = 1;
             c->exit_status = WIFEXITED(ws) ? WEXITSTATUS(ws) : 128 + WTERMSIG(ws);
-            c->cpu_s = (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec -
-                                ru0.ru_utime.tv_sec - ru0.ru_stime.tv_sec) +
-                       1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec -
-                                       ru0.ru_utime.tv_usec - ru0.ru_stime.tv_usec);
+            /* (a continued specimen: its time before, from its checkpoint) */
+            c->cpu_s += (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec -
+                                 ru0.ru_utime.tv_sec - ru0.ru_stime.tv_sec) +
+                        1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec -
+                                        ru0.ru_utime.tv_usec - ru0.ru_stime.tv_usec);
             if (drain(c) != 0) {
                 drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
                 ens_stop = -1;
@@ -556,6 +675,17 @@ int drape_cli_specimens_run(const run_args *a)
             if (c->exit_status == 0 && !c->have_res)
                 fprintf(stderr, "drape: specimen %d (seed %lu): its result could not be read "
                         "(internal error)\n", k + 1, seed0 + (unsigned long)k);
+            /* kept for --resume as it comes in; a result that cannot be
+             * stored only costs that specimen's run again */
+            if (m && spec_done(c)) {
+                drape_error se;
+                drape_error_clear(&se);
+                if (drape_cli_ens_result_store(m, k, c->exit_status, c->cpu_s, c->buf, c->len,
+                                               &se) == 0)
+                    n_kept++;
+                else
+                    drape_cli_print_error(&se);
+            }
             n_running--;
             n_done++;
             if (progress)
@@ -574,13 +704,14 @@ int drape_cli_specimens_run(const run_args *a)
     for (int k = 0; k < n; k++) {
         child *c = &ch[k];
         drape_cli_specimen *p = &spec[k];
+        int ran = c->started || c->stored;
         p->seed = seed0 + (unsigned long)k;
         /* not started, or stopped by the signal before it reported */
-        const char *stx = k >= n_started || (ens_stop > 0 && !c->have_res && c->exit_status >= 128)
+        const char *stx = !ran || (ens_stop > 0 && !c->have_res && c->exit_status >= 128)
                               ? "interrupted" : spec_status(c);
         snprintf(p->status, sizeof p->status, "%.15s", stx);
-        int ok = k < n_started && spec_ok(c);
-        if (k < n_started && c->have_res && strcmp(p->status, "interrupted") == 0) interrupted = 1;
+        int ok = ran && spec_ok(c);
+        if (ran && c->have_res && strcmp(p->status, "interrupted") == 0) interrupted = 1;
         if (!ok && strcmp(p->status, "interrupted") != 0) {
             n_failed++;
             snprintf(p->status, sizeof p->status, "failed");
@@ -590,7 +721,7 @@ int drape_cli_specimens_run(const run_args *a)
         p->nodes = isfinite(nd) ? (int)nd : -1;
         p->r_min_m = ok ? drape_cli_result_get(&c->res, "r_min_m") : NAN;
         p->r_max_m = ok ? drape_cli_result_get(&c->res, "r_max_m") : NAN;
-        p->cpu_s = k < n_started ? c->cpu_s : NAN;
+        p->cpu_s = ran ? c->cpu_s : NAN;
         dcs[k] = p->dc;
         nodes[k] = p->nodes;
         if (ok && !first) first = c;
@@ -601,13 +732,14 @@ int drape_cli_specimens_run(const run_args *a)
     /* the inputs (integrator, lattice, options) from any specimen that
      * reported, also when none succeeded (failed, interrupted) */
     const child *proto = first;
-    for (int k = 0; !proto && k < n_started; k++)
+    for (int k = 0; !proto && k < n; k++)
         if (ch[k].have_res) proto = &ch[k];
     drape_ensemble_stats st;
     drape_ensemble_stats_compute(dcs, nodes, n, &st);
     /* every specimen failed in the same way that is not numerical (an
      * output directory it cannot write, no memory): that error, its exit
-     * status and no result, as for one specimen */
+     * status and no result, as for one specimen (and no record: there is
+     * nothing to resume) */
     if (n_failed == n && !interrupted) {
         int common = ch[0].exit_status;
         for (int k = 1; k < n; k++)
@@ -615,6 +747,7 @@ int drape_cli_specimens_run(const run_args *a)
         if (common > 0 && common < 128 && common != drape_error_exit_status(DRAPE_E_NUMERIC)) {
             fprintf(stderr, "drape: every specimen failed (exit status %d)\n", common);
             status = common;
+            if (m && !resuming && n_kept == 0) unlink(m->path);
             if (created_dir) rmdir(a->out_dir); /* only if empty */
             goto out;
         }
@@ -622,7 +755,8 @@ int drape_cli_specimens_run(const run_args *a)
     double wall = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     ens_ident id = {fabric_name[0] ? fabric_name : NULL, drape_scene_kind_name(s.kind),
                     s.spacing};
-    build_result(r, ch, n, proto, &st, n_failed, interrupted, wall, seed0, spec, &id);
+    build_result(r, ch, n, proto, &st, n_failed, interrupted, wall + wall_prev, cpu_prev,
+                 seed0, spec, &id);
     if (!drape_cli_result_check_keys(r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "ensemble result fields differ from drape_cli_run_keys");
@@ -641,11 +775,27 @@ int drape_cli_specimens_run(const run_args *a)
         drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");
         goto fail;
     }
+    /* the end of this part in the manifest: its status (a finished
+     * ensemble is not resumed), the time of every part so far */
+    if (m) {
+        const drape_cli_field *sf = drape_cli_result_find(r, "status");
+        drape_error me;
+        drape_error_clear(&me);
+        if (drape_cli_ens_record_end(m, sf && sf->type == DRAPE_CLI_F_STR ? sf->text : "failed",
+                                     drape_cli_result_get(r, "cpu_s"), wall + wall_prev,
+                                     &me) != 0)
+            drape_cli_print_error(&me);
+    }
     if (interrupted) {
         int sig = ens_stop > 0 ? (int)ens_stop : SIGINT;
-        fprintf(stderr, "drape: interrupted by %s with %d of %d specimens finished (an ensemble "
-                "is not resumable: run it again)\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
-                n_ok, n);
+        if (a->out_dir)
+            fprintf(stderr, "drape: interrupted by %s with %d of %d specimens finished; "
+                    "continue with `drape run --resume %s`\n",
+                    sig == SIGTERM ? "SIGTERM" : "SIGINT", n_ok, n, a->out_dir);
+        else
+            fprintf(stderr, "drape: interrupted by %s with %d of %d specimens finished (an "
+                    "ensemble without --out DIR is not resumable: run it again)\n",
+                    sig == SIGTERM ? "SIGTERM" : "SIGINT", n_ok, n);
         status = 128 + sig;
     } else if (n_failed == n) { /* (a hang or cantilever has no DC: st.n is 0) */
         fprintf(stderr, "drape: every specimen failed\n");
@@ -659,16 +809,19 @@ int drape_cli_specimens_run(const run_args *a)
 fail:
     drape_cli_print_error(&err);
     status = drape_error_exit_status(err.kind);
-    for (int k = 0; ch && k < n_started; k++)
-        if (!ch[k].done) kill(ch[k].pid, SIGTERM);
+    for (int k = 0; ch && k < n; k++)
+        if (ch[k].started && !ch[k].done) kill(ch[k].pid, SIGTERM);
     while (n_running > 0 && wait(NULL) > 0) n_running--;
+    /* a new ensemble that kept nothing leaves no manifest */
+    if (m && !resuming && n_kept == 0) unlink(m->path);
     if (created_dir) rmdir(a->out_dir); /* only if empty */
 out:
     for (int k = 0; ch && k < n; k++) {
-        if (ch[k].fd >= 0 && k < n_started) close(ch[k].fd);
+        if (ch[k].fd >= 0) close(ch[k].fd);
         drape_free(ch[k].buf);
         drape_free(ch[k].radii);
     }
+    drape_cli_ens_record_free(&own);
     drape_free(ch);
     drape_free(spec);
     drape_free(sv);
