@@ -491,7 +491,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         /* a single run in an ensemble's directory: DIR is this run's now
          * (its shadow.svg replaces the ensemble's), and --resume DIR is
          * its (docs/outputs.md) */
-        if (!child && !resume_dir) {
+        if (!child && !resume_dir && !ra->check_only) {
             char man[4200];
             snprintf(man, sizeof man, "%s/" DRAPE_ENSEMBLE_MANIFEST, out_dir);
             unlink(man);
