@@ -26,6 +26,7 @@
  * drape_fabric_load, and only then renamed into place; if any input is
  * bad, no file is written (docs/batch.md, "Importers"). */
 #include <errno.h>
+#include <float.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -737,8 +738,10 @@ static void kes_row(importer *im, const char *file, const drape_cli_csv_rec *r,
         }
         if (!plain_number(cell[k])) ROW_ERR(k, "expected a number in %s, got \"%s\"",
                                             kes_cols[k].unit, cell[k]);
+        errno = 0;
         v[k] = strtod(cell[k], NULL);
-        if (!isfinite(v[k])) ROW_ERR(k, "number out of range: %s", cell[k]);
+        if (errno == ERANGE || !isfinite(v[k]) || (v[k] != 0.0 && fabs(v[k]) < DBL_MIN))
+            ROW_ERR(k, "number out of range: %s", cell[k]);
         if (kes_cols[k].positive ? !(v[k] > 0) : !(v[k] >= 0))
             ROW_ERR(k, "must be %s, got %s", kes_cols[k].positive ? "positive" : "non-negative",
                     cell[k]);

@@ -4,6 +4,7 @@
  * from a checkpoint (cli_run.c), or one specimen or an ensemble
  * (cli_specimens.c).  The run itself is cli_run.c. */
 #include <errno.h>
+#include <float.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -268,8 +269,10 @@ int drape_cli_run_option(run_args *ra, const char *name, const char *text, char 
     }
     if (IS("--fall-swing")) {
         char *end;
+        errno = 0;
         v = strtod(text, &end);
-        if (*end || end == text || !(v >= 0.0 && v < 1.0))
+        if (*end || end == text || !(v >= 0.0 && v < 1.0) || errno == ERANGE ||
+            (v != 0.0 && v < DBL_MIN))
             return WHY("--fall-swing: expected a fraction in [0, 1), got `%s'", text);
         return ra->fall_swing = v, 0;
     }

@@ -24,6 +24,8 @@
 #include "drape/units.h"
 
 #include <ctype.h>
+#include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -194,14 +196,29 @@ static size_t scan_decimal(const char *s, int allow_sign)
     return i;
 }
 
-/* strtod on exactly n bytes of s. */
+/* strtod on exactly n bytes of s.  A literal strtod cannot represent as a
+ * normal double (it overflows to inf, underflows to 0, or lands among the
+ * denormals below DBL_MIN) gives NAN, refused by the caller as out of
+ * range: no quantity drape reads is meant to be 1e-400 or 1e-310, and
+ * taking it as 0 would pass checks such as "non-negative".  An exact zero
+ * ("0", "0e-400") is zero. */
 static double to_double(const char *s, size_t n)
 {
     char buf[128];
     if (n >= sizeof buf) return NAN; /* absurdly long literal */
     memcpy(buf, s, n);
     buf[n] = 0;
-    return strtod(buf, NULL);
+    errno = 0;
+    double v = strtod(buf, NULL);
+    if (errno == ERANGE || !isfinite(v) || (v != 0.0 && fabs(v) < DBL_MIN))
+        return NAN;
+    return v;
+}
+
+/* A nonzero result that underflowed in arithmetic (below DBL_MIN). */
+static int underflowed(double r)
+{
+    return r == 0.0 || fabs(r) < DBL_MIN;
 }
 
 static const unit_symbol *symbol_lookup(const char *s, size_t n)
@@ -371,11 +388,13 @@ int drape_units_parse(const char *text, drape_dim dim, double *si, char *why,
             say(why, nwhy, "division by zero in \"%.*s\"", (int)n, s);
             return -1;
         }
-        v /= d;
+        if (v != 0.0 && isfinite(d) && underflowed(v / d)) v = NAN;
+        else v /= d;
         k += 1 + k2;
     }
     if (!isfinite(v)) {
-        say(why, nwhy, "number out of range: \"%.*s\"", (int)n, s);
+        say(why, nwhy, "number out of range: \"%.*s\" (a magnitude from %.1e "
+            "to %.1e, or 0)", (int)n, s, DBL_MIN, DBL_MAX);
         return -1;
     }
     size_t u = k;
@@ -414,8 +433,9 @@ int drape_units_parse(const char *text, drape_dim dim, double *si, char *why,
         return -1;
     }
     double r = v * scale;
-    if (!isfinite(r)) {
-        say(why, nwhy, "quantity out of range: \"%.*s\"", (int)n, s);
+    if (!isfinite(r) || (v != 0.0 && underflowed(r))) {
+        say(why, nwhy, "quantity out of range: \"%.*s\" (in SI, a magnitude "
+            "from %.1e to %.1e, or 0)", (int)n, s, DBL_MIN, DBL_MAX);
         return -1;
     }
     *si = r;

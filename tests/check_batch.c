@@ -540,7 +540,9 @@ START_TEST(test_usage)
         "--strain-limit 0", "--method quench", "--linear-solver lu", "--max-order 6",
         "--specimens 0", "--seed -1", "--fall-time 1m", "--fall-step 0",
         "--fall-swing 1", "--fall-tol -1cm", "--fall-fold-time -1s", "--fall-retry 1e400",
-        "--damping-shear 2m", "--terms stretch,twist"};
+        "--damping-shear 2m", "--terms stretch,twist",
+        /* underflow is refused, not read as 0 */
+        "--fall-tol 1e-400m", "--fall-swing 1e-400", "--damping-shear 1e-310s"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char run_err[1024];
         snprintf(args, sizeof args, "run %s " SCENE, bad[i]);

@@ -353,6 +353,7 @@ START_TEST(test_kes_errors)
         {"ok,100,1,1,0.1,0.1,1,1\nok,100,1,1,0.1,0.1,1,1\n", "t.csv:3: name: fabric `ok` is also made from", 1},
         {"a/b,100,1,1,0.1,0.1,1,1\n", "t.csv:2:1: name: \"a/b\" is not usable", 1},
         {"ok,1e999,1,1,0.1,0.1,1,1\n", "weight_g_m2: number out of range", 1},
+        {"ok,100,1,1,0.1,0.1,1e-400,1\n", "G_warp: number out of range", 1},
         {"ok,0x10,1,1,0.1,0.1,1,1\n", "weight_g_m2: expected a number in g/m^2", 1},
         {"name,weight_g_m2,k_warp_N_m,k_weft_N_m,B_warp,B_weft,G_warp\n", "t.csv:1: G_weft: missing column", 0},
         {"name,weight_g_m2,k_warp_N_m,k_weft_N_m,B_warp,B_weft,G_warp,G_weft,Bwarp\n",

@@ -665,6 +665,14 @@ START_TEST(test_bad_ranges)
                  "perturbation: {amplitude: -1 mm}\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 27, "perturbation.amplitude",
                  "non-negative");
+    /* a value that underflows is refused, not read as 0 */
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1e-400 m}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 27, "perturbation.amplitude",
+                 "number out of range");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "damping: {edge: 1e-310 N.s/m}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 17, "damping.edge", "number out of range");
     /* tolerances in (0, 1) */
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "solver: {rtol: 1.5}\nend: {t_max: 5 s}\n",
@@ -752,6 +760,11 @@ START_TEST(test_bad_names)
                  "specimen: {length: 20 cm, width: 2 cm, direction: 0x2D}\n"
                  "overhang: 6 cm\nspacing: 5 mm\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 3, 51, "specimen.direction", NULL);
+    /* nor does an angle that underflows read as the warp */
+    expect_error("scene: cantilever\nfabric: @F\n"
+                 "specimen: {length: 20 cm, width: 2 cm, direction: 1e-400}\n"
+                 "overhang: 6 cm\nspacing: 5 mm\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 3, 51, "specimen.direction", "out of range");
     /* shape must suit the scene */
     expect_error("scene: cusick\nfabric: @F\n"
                  "specimen: {shape: rectangle, width: 30 cm, height: 30 cm}\n"

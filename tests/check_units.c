@@ -68,6 +68,11 @@ static const qcase good[] = {
     {"0.9 gf/cm/deg", &DRAPE_DIM_FORCE_PER_LENGTH,
      0.9 * 9.80665e-3 / 1e-2 / (M_PI / 180)},
     {"9.81 m/s^2", &(drape_dim){0, 1, -2}, 9.81},
+    /* tiny but normal values pass; an exact zero is zero */
+    {"1e-12 m", &DRAPE_DIM_LENGTH, 1e-12},
+    {"1e-300 m", &DRAPE_DIM_LENGTH, 1e-300},
+    {"0e-400 m", &DRAPE_DIM_LENGTH, 0.0},
+    {"0 m", &DRAPE_DIM_LENGTH, 0.0},
 };
 
 START_TEST(test_good)
@@ -138,6 +143,15 @@ static const bcase bad[] = {
     {"1e999 m", &DRAPE_DIM_LENGTH, "out of range"},
     {"1e308 km", &DRAPE_DIM_LENGTH, "out of range"},
     {"1/0 s", &DRAPE_DIM_TIME, "division by zero"},
+    /* underflow is refused like overflow, not read as 0 (or a denormal) */
+    {"1e-400 m", &DRAPE_DIM_LENGTH, "number out of range"},
+    {"-1e-400 m", &DRAPE_DIM_LENGTH, "number out of range"},
+    {"1e-400", &DRAPE_DIM_NONE, "number out of range"},
+    {"1e-310 m", &DRAPE_DIM_LENGTH, "number out of range"},
+    {"1e-400/3 s", &DRAPE_DIM_TIME, "number out of range"},
+    {"1/1e308 s", &DRAPE_DIM_TIME, "number out of range"},
+    {"1e-306 mm", &DRAPE_DIM_LENGTH, "quantity out of range"},
+    {"1e-306 um", &DRAPE_DIM_LENGTH, "quantity out of range"},
     {"5 furlong", &DRAPE_DIM_LENGTH, "unknown unit \"furlong\""},
     {"5 M", &DRAPE_DIM_LENGTH, "unknown unit \"M\""},
     {"5 mm xyz", &DRAPE_DIM_LENGTH, "unexpected \" xyz\""},
