@@ -317,13 +317,31 @@ static int b_scalar(builder *b, const yaml_event_t *ev)
     return b_attach(b, n);
 }
 
+/* Bytes of the line break at s (n bytes available), 0 if none.  The breaks
+ * are libyaml's (its IS_BREAK and SKIP_LINE): CR LF, CR, LF, NEL (U+0085),
+ * LS (U+2028) and PS (U+2029), each one break, so that lines drape counts
+ * itself agree with the lines libyaml reports (an old-Mac file of CR-only
+ * lines is not all "line 1"). */
+static size_t line_break_len(const unsigned char *s, size_t n)
+{
+    if (s[0] == '\r') return n >= 2 && s[1] == '\n' ? 2 : 1;
+    if (s[0] == '\n') return 1;
+    if (n >= 2 && s[0] == 0xC2 && s[1] == 0x85) return 2;
+    if (n >= 3 && s[0] == 0xE2 && s[1] == 0x80 && (s[2] == 0xA8 || s[2] == 0xA9))
+        return 3;
+    return 0;
+}
+
 /* 1-based line and column of byte offset `off` (column in bytes). */
 static void offset_position(const char *text, size_t off, int *line, int *col)
 {
+    const unsigned char *s = (const unsigned char *)text;
     int l = 1, c = 1;
-    for (size_t i = 0; i < off; i++) {
-        if (text[i] == '\n') { l++; c = 1; }
-        else c++;
+    size_t i = 0;
+    while (i < off) {
+        size_t k = line_break_len(s + i, off - i);
+        if (k) { l++; c = 1; i += k; }
+        else { c++; i++; }
     }
     *line = l;
     *col = c;

@@ -202,6 +202,28 @@ START_TEST(test_binary)
 }
 END_TEST
 
+/* drape's own line count (the binary-data check runs before libyaml) uses
+ * libyaml's line breaks: CR LF, CR, LF, NEL, LS, PS each end one line.  In
+ * each file the bad byte is on line 3 at column 4 ("c: " is 3 bytes), and
+ * libyaml's own error (a duplicate key) is on line 3 too. */
+START_TEST(test_line_breaks)
+{
+    static const char *const brk[] = {"\r", "\r\n", "\n", "\xC2\x85",
+                                      "\xE2\x80\xA8", "\xE2\x80\xA9"};
+    for (size_t i = 0; i < sizeof brk / sizeof brk[0]; i++) {
+        const char *b = brk[i];
+        char text[128];
+        snprintf(text, sizeof text, "a: 1%sb: 2%sc: \x07%s", b, b, b);
+        size_t byte = 2 * (4 + strlen(b)) + 4;
+        char part[64];
+        snprintf(part, sizeof part, "byte %zu (control character 0x07)", byte);
+        expect_fail(text, strlen(text), DRAPE_E_SYNTAX, 3, 4, NULL, part);
+        snprintf(text, sizeof text, "a: 1%sb: 2%sa: 3%s", b, b, b);
+        expect_fail(text, strlen(text), DRAPE_E_INPUT, 3, 1, "a", "duplicate key");
+    }
+}
+END_TEST
+
 START_TEST(test_too_large)
 {
     size_t n = (size_t)DRAPE_YDOC_MAX_BYTES + 1;
@@ -476,6 +498,7 @@ Suite *yamldoc_suite(void)
     tcase_add_test(tc, test_malformed);
     tcase_add_test(tc, test_empty);
     tcase_add_test(tc, test_binary);
+    tcase_add_test(tc, test_line_breaks);
     tcase_add_test(tc, test_too_large);
     tcase_add_test(tc, test_documents);
     tcase_add_test(tc, test_anchors_tags);
