@@ -16,6 +16,7 @@
 #include "cli_batch.h"
 #include "cli_data.h"
 #include "cli_io.h"
+#include "cli_run.h"
 #include "drape/alloc.h"
 #include "drape/yamldoc.h"
 
@@ -165,13 +166,24 @@ int drape_cli_batch_write_results(const batch *b, drape_error *err)
     return write_sums(b, err);
 }
 
-static int cmp_str(const void *a, const void *b)
+/* Lines x and y of batch.args say the same: the same text, or the same
+ * option ("--spacing 5mm", "--spacing 0.5cm") with values that parse to
+ * the same value (drape_cli_run_option_same). */
+static int same_line(const char *x, const char *y)
 {
-    return strcmp(*(const char *const *)a, *(const char *const *)b);
+    if (strcmp(x, y) == 0) return 1;
+    const char *sx = strchr(x, ' '), *sy = strchr(y, ' ');
+    if (strncmp(x, "--", 2) != 0 || !sx || !sy || sx - x != sy - y ||
+        strncmp(x, y, (size_t)(sx - x)) != 0 || (size_t)(sx - x) >= 64)
+        return 0;
+    char name[64];
+    memcpy(name, x, (size_t)(sx - x));
+    name[sx - x] = 0;
+    return drape_cli_run_option_same(name, sx + 1, sy + 1);
 }
 
-/* 1 if texts x and y hold the same lines in any order, leaving out those
- * that start with skip (NULL: none). */
+/* 1 if texts x and y hold the same lines (same_line) in any order, leaving
+ * out those that start with skip (NULL: none). */
 static int same_lines(const char *x, const char *y, const char *skip)
 {
     enum { MAXL = 128 };
@@ -185,10 +197,16 @@ static int same_lines(const char *x, const char *y, const char *skip)
             if (n[s] == MAXL) { same = 0; break; }
             l[s][n[s]++] = p;
         }
-        qsort(l[s], (size_t)n[s], sizeof l[s][0], cmp_str);
     }
     same = same && n[0] == n[1];
-    for (int i = 0; same && i < n[0]; i++) same = strcmp(l[0][i], l[1][i]) == 0;
+    /* each line of x matches one of y not matched before */
+    char used[MAXL] = {0};
+    for (int i = 0; same && i < n[0]; i++) {
+        int hit = 0;
+        for (int j = 0; j < n[1] && !hit; j++)
+            if (!used[j] && same_line(l[0][i], l[1][j])) used[j] = hit = 1;
+        same = hit;
+    }
     drape_free(t[0]);
     drape_free(t[1]);
     return same;
@@ -215,7 +233,8 @@ int drape_cli_batch_check_stamp(const batch *b, int resume, drape_error *err)
     if (resume && access(path, F_OK) == 0) {
         if (!(have = drape_cli_read_file(path, 1 << 20, NULL, err))) goto out;
         /* the same lines in any order: `--seed 3 --spacing 5mm` is the
-         * batch of `--spacing 5mm --seed 3` (each option occurs once) */
+         * batch of `--spacing 5mm --seed 3` (each option occurs once), and
+         * of `--spacing 0.5cm --seed 3` (values compared as parsed) */
         int same = same_lines(have, want, NULL);
         int same_but_sum = !same && same_lines(have, want, "scene-sum ");
         int have_sum = strncmp(have, "scene-sum ", 10) == 0 || strstr(have, "\nscene-sum ");

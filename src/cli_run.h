@@ -64,6 +64,13 @@ void drape_cli_run_args_init(run_args *ra);
  * ("--rtol: must be in (0, 1), got 2"). */
 int drape_cli_run_option(run_args *ra, const char *name, const char *text, char *why, size_t n);
 
+/* 1 if texts a and b of option name (as drape_cli_run_option takes them)
+ * both parse and set the same value: `--spacing 5mm` and `0.5cm`,
+ * `--rtol 1e-4` and `0.0001`, `--terms bend,stretch` and `stretch,bend`.
+ * Values are compared exactly (bit for bit), so that runs given either
+ * text are the same runs; 0 otherwise (or if either does not parse). */
+int drape_cli_run_option_same(const char *name, const char *a, const char *b);
+
 /* In an ensemble's child process: where the result goes instead of stdout
  * (drape_cli_result_write lines and an "@shadow" line). */
 typedef struct run_child {

@@ -346,6 +346,33 @@ void drape_cli_run_args_init(run_args *ra)
     ra->jobs = 0; /* one per core */
 }
 
+static int same_text(const char *a, const char *b)
+{
+    return a == b || (a && b && strcmp(a, b) == 0);
+}
+
+int drape_cli_run_option_same(const char *name, const char *a, const char *b)
+{
+    run_args x, y;
+    char why[512];
+    memset(&x, 0, sizeof x);
+    memset(&y, 0, sizeof y);
+    if (drape_cli_run_option(&x, name, a, why, sizeof why) != 0 ||
+        drape_cli_run_option(&y, name, b, why, sizeof why) != 0)
+        return 0;
+    /* every field drape_cli_run_option sets (the others stay 0 in both) */
+    return same_text(x.integrator, y.integrator) && same_text(x.form, y.form) &&
+           x.rtol == y.rtol && x.atol == y.atol && x.spacing == y.spacing &&
+           x.t_max == y.t_max && x.strain_limit == y.strain_limit &&
+           x.max_steps == y.max_steps && x.max_order == y.max_order && x.linsol == y.linsol &&
+           x.method == y.method && x.has_seed == y.has_seed && x.seed == y.seed &&
+           x.fall_time == y.fall_time && x.fall_step == y.fall_step &&
+           x.fall_swing == y.fall_swing && x.fall_tol == y.fall_tol &&
+           x.fall_fold_time == y.fall_fold_time && x.fall_retry == y.fall_retry &&
+           x.damping_shear == y.damping_shear && x.substeps == y.substeps &&
+           x.terms == y.terms && x.specimens == y.specimens;
+}
+
 int drape_cli_run(int argc, char **argv)
 {
     /* the options that set a value of the run: drape_cli_run_option */

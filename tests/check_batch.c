@@ -436,6 +436,19 @@ START_TEST(test_resume)
     snprintf(args, sizeof args, "batch -q %s %s --t-max 0.05s --spacing 5cm --out %s --resume",
              SCENE, COTTON, dir);
     ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    /* the same values written otherwise (5cm = 0.05m = 50mm, 0.05s =
+     * 50ms = 5e-2): the same batch (was refused: compared as written) */
+    snprintf(args, sizeof args, "batch -q %s %s --t-max 50ms --spacing 0.05m --out %s --resume",
+             SCENE, COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 50mm --t-max 5e-2 --out %s --resume",
+             SCENE, COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    /* a value only a little different is another value */
+    snprintf(args, sizeof args, "batch -q %s %s --t-max 0.05s --spacing 5.000001cm --out %s "
+             "--resume", SCENE, COTTON, dir);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "batch.args") != NULL, "%s", err);
 
     /* other run options: refused */
     snprintf(args, sizeof args, "batch -q %s %s --spacing 4cm --t-max 0.05s --out %s --resume",
