@@ -120,7 +120,9 @@ static json_object *json_specimens(const drape_cli_specimen *sp, int n)
             json_object_put(a);
             return NULL;
         }
-        json_object_object_add(o, "seed", json_object_new_int64((int64_t)sp[k].seed));
+        json_object_object_add(o, "seed", sp[k].seed_unknown
+                                              ? NULL
+                                              : json_object_new_int64((int64_t)sp[k].seed));
         json_object_object_add(o, "status", json_object_new_string(sp[k].status));
         json_object_object_add(o, "dc", json_num(sp[k].dc, 0));
         json_object_object_add(o, "nodes", json_num(sp[k].nodes, 1));

@@ -31,6 +31,8 @@ typedef enum drape_cli_ftype {
 /* One specimen's line in the `specimens` array. */
 typedef struct drape_cli_specimen {
     unsigned long seed;
+    int seed_unknown;  /* seed printed as null (a run resumed from a
+                          checkpoint that did not store it) */
     char status[16];   /* equilibrium, t_max, failed, interrupted */
     double dc;         /* NaN if none */
     int nodes;         /* -1 if none */

@@ -94,6 +94,7 @@ int drape_cli_resume_load(const char *dir, resume_info *ri, drape_error *err)
     ri->fixed_step = ck_num(c, "step_s"); /* added (issue 16) */
     ri->terms = ck_num(c, "terms");       /* added (issue 18) */
     ri->damping_shear = ck_num(c, "damping_shear_s"); /* added (thirteenth session) */
+    ri->seed = ck_num(c, "seed"); /* added: NaN (unknown) in older files */
     double ms = ck_num(c, "max_steps"), fr = ck_num(c, "frames"), h5 = ck_num(c, "hdf5");
     ri->ref.valid = ck_num(c, "energy_ref_valid") == 1.0;
     ri->ref.energy_J = ck_num(c, "energy_ref_J");
@@ -106,6 +107,8 @@ int drape_cli_resume_load(const char *dir, resume_info *ri, drape_error *err)
     if (!(ri->rtol > 0) || !(ri->atol > 0) || !(ri->spacing > 0) || !(ri->t_max > 0) ||
         !(ri->strain_limit > 0) || !(ms >= 0) || !(fr >= 0 && fr < INT_MAX) ||
         !(h5 == 0 || h5 == 1) || isnan(ri->below_since) ||
+        (!isnan(ri->seed) && !(ri->seed >= 0 && ri->seed <= (double)DRAPE_SCENE_SEED_MAX &&
+                               ri->seed == floor(ri->seed))) ||
         (ri->ref.valid && !(isfinite(ri->ref.energy_J) && ri->ref.scale_J > 0)))
         return drape_error_set(err, DRAPE_E_IO, ri->h5_path, 0, 0, NULL,
                                "--resume: missing or invalid values in /run");
@@ -151,7 +154,7 @@ static void abs_path(const char *path, char *out, size_t n)
 
 void drape_cli_run_kv_fill(run_kv *k, const char *scene_path, const drape_scene *s,
                            const drape_sim_opts *so, const drape_sim_result *res, int frames,
-                           int signal)
+                           int signal, double seed)
 {
     k->n = 0;
     abs_path(scene_path, k->scene_abs, sizeof k->scene_abs);
@@ -185,4 +188,5 @@ void drape_cli_run_kv_fill(run_kv *k, const char *scene_path, const drape_scene 
     kv_num(k, "step_s", so->fixed_step); /* animate's step (issue 16) */
     kv_num(k, "terms", (double)s->terms); /* the terms run, --terms included (issue 18) */
     kv_num(k, "damping_shear_s", s->damping_shear); /* --damping-shear included */
+    kv_num(k, "seed", seed); /* the perturbation seed, --seed included; NaN unknown */
 }

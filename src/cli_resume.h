@@ -26,6 +26,9 @@ typedef struct resume_info {
                            stored (older files: the scene's) */
     double damping_shear; /* s, the shear damping run (--damping-shear); NaN
                              when not stored (older files: the scene's) */
+    double seed;        /* the perturbation seed run (--seed included); NaN
+                           when not stored (older files, or a run resumed
+                           from one: unknown, reported null) */
     long max_steps;
     int max_order;   /* 0: the scene's (files written before --max-order) */
     int frames;      /* frames written before (OBJ and HDF5 numbering) */
@@ -50,9 +53,10 @@ typedef struct run_kv {
 } run_kv;
 
 /* Fill k with the run's options and resume state (signal: the one that
- * stopped the run, 0 = none). */
+ * stopped the run, 0 = none; seed: the perturbation seed run, NaN when
+ * unknown). */
 void drape_cli_run_kv_fill(run_kv *k, const char *scene_path, const drape_scene *s,
                            const drape_sim_opts *so, const drape_sim_result *res, int frames,
-                           int signal);
+                           int signal, double seed);
 
 #endif /* DRAPE_CLI_RESUME_H */

@@ -411,6 +411,10 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (ra->terms) s.terms = ra->terms;
     if (ri && ri->terms >= 1.0 && ri->terms <= (double)DRAPE_TERM_ALL) /* what ran */
         s.terms = (unsigned)ri->terms;
+    /* the seed that ran (--seed included), not the scene's; a checkpoint
+     * that did not store it: unknown, reported null */
+    int seed_known = !ri || !isnan(ri->seed);
+    if (ri && seed_known) s.perturb_seed = (unsigned long)ri->seed;
     /* an oblique strip is a staircase of the lattice: without shear its
      * cells turn freely (docs/scenes.md); allowed, as docs/validation.md
      * runs it on purpose, but said */
@@ -663,6 +667,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     drape_cli_specimen one;
     memset(&one, 0, sizeof one);
     one.seed = s.perturb_seed;
+    one.seed_unknown = !seed_known;
     snprintf(one.status, sizeof one.status, "%s", drape_sim_status_name(res.status));
     one.dc = have_dc ? sh.dc : NAN;
     one.nodes = have_dc ? sh.nodes : -1;
@@ -683,7 +688,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     r.n_spec = 1;
     drape_cli_result_specimens(&r, "specimens");
     drape_cli_result_int(&r, "specimens_failed", res.status == DRAPE_SIM_FAILED ? 1 : 0);
-    drape_cli_result_int(&r, "seed", (double)s.perturb_seed);
+    drape_cli_result_int(&r, "seed", seed_known ? (double)s.perturb_seed : NAN);
     drape_cli_result_num(&r, "fall_time_s", method == DRAPE_METHOD_FALL ? fall_time : NAN);
     drape_cli_result_num(&r, "fall_step_s", method == DRAPE_METHOD_FALL ? fall_step : NAN);
     {
@@ -786,7 +791,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                               NULL, 0};
         if (!method_static) {
             if (!(rk = drape_calloc(1, sizeof *rk))) goto nomem;
-            drape_cli_run_kv_fill(rk, scene_path, &s, &so, &res, rc.frame, stop_signal);
+            drape_cli_run_kv_fill(rk, scene_path, &s, &so, &res, rc.frame, stop_signal,
+                                  seed_known ? (double)s.perturb_seed : NAN);
             if (ra->ensemble_id) /* an ensemble's specimen: whose (added) */
                 rk->kv[rk->n++] = (drape_kv){"ensemble_id", ra->ensemble_id, 0.0};
             fin.run = rk->kv;

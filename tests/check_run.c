@@ -775,6 +775,51 @@ START_TEST(test_animate_resume)
 }
 END_TEST
 
+static int count_str(const char *text, const char *part)
+{
+    int n = 0;
+    for (const char *p = strstr(text, part); p; p = strstr(p + 1, part)) n++;
+    return n;
+}
+
+/* An interrupted run started with --seed reports that seed when resumed
+ * (stored in /run as `seed`), at the top and in its specimen, not the
+ * scene's; a checkpoint of an older drape, without the attribute, reports
+ * null (the seed that ran is unknown). */
+START_TEST(test_resume_seed)
+{
+    const char *scene = ir_scene();
+    char dir[600], old[700], wait_for[700], args[1600];
+    snprintf(dir, sizeof dir, "%s/interrupted-seed", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/frame_000000.obj", dir);
+    const char *a1[] = {"run", "-q", scene, "--seed", "7", "--out", dir, NULL};
+    int code = run_and_signal(wait_for, SIGTERM, a1);
+    ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
+    ck_assert_int_eq(count_str(out, "\"seed\": 7,"), 2);
+    /* the same checkpoint as an older drape wrote it: no /run seed */
+    snprintf(old, sizeof old, "%s/interrupted-seed-old", tu_scratch_dir());
+    snprintf(args, sizeof args, "cp -R '%s' '%s'", dir, old);
+    ck_assert_int_eq(system(args), 0);
+    snprintf(args, sizeof args, "%s/drape.h5", old);
+    hid_t f = H5Fopen(args, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert(f >= 0);
+    ck_assert(H5Adelete_by_name(f, "run", "seed", H5P_DEFAULT) >= 0);
+    H5Fclose(f);
+
+    snprintf(args, sizeof args, "run --resume '%s'", dir);
+    code = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(code == 0, "exit %d, stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"t_max\""), "%s", out);
+    ck_assert_msg(count_str(out, "\"seed\": 7,") == 2, "%s", out);
+
+    snprintf(args, sizeof args, "run --resume '%s'", old);
+    code = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(code == 0, "exit %d, stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"t_max\""), "%s", out);
+    ck_assert_msg(count_str(out, "\"seed\": null,") == 2, "%s", out);
+}
+END_TEST
+
 /* --resume refuses what it cannot continue, with the documented statuses. */
 START_TEST(test_resume_refusals)
 {
@@ -908,6 +953,7 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_imex_limp_fold);
     tcase_add_test(tc, test_interrupt_and_resume);
     tcase_add_test(tc, test_resume_refusals);
+    tcase_add_test(tc, test_resume_seed);
     tcase_add_test(tc, test_max_order);
     tcase_add_test(tc, test_animate_resume);
     tcase_add_test(tc, test_strain_limit_stops_run);
