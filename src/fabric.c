@@ -63,6 +63,16 @@
 #define DRAPE_FABRIC_KES_G0 (0.5 * M_PI / 180.0)      /* rad */
 #define DRAPE_FABRIC_KES_G5 (5.0 * M_PI / 180.0)      /* rad */
 
+/* Values far outside any textile (docs/fabrics.md, "Plausible values"):
+ * accepted, but warned about, since they are most likely a wrong unit or
+ * exponent (`20 g/cm^2` for 20 mg/cm^2) and otherwise fail only in the
+ * run.  Each bound is at least 10x beyond every shipped fabric (weights
+ * 113..324 g/m^2, tensile stiffness 33..10000 N/m). */
+#define DRAPE_FABRIC_WEIGHT_LO 5e-3  /* kg/m^2 (5 g/m^2) */
+#define DRAPE_FABRIC_WEIGHT_HI 5.0   /* kg/m^2 (5000 g/m^2) */
+#define DRAPE_FABRIC_K_LO 1.0        /* N/m */
+#define DRAPE_FABRIC_K_HI 1e7        /* N/m */
+
 /* ------------------------------------------------------------ fits */
 
 /* The unit block of a fit: scales to SI for x and y. */
@@ -663,8 +673,16 @@ static int get_kes(const drape_yread *r, const drape_ynode *kn,
 static int get_k(const drape_yread *r, const drape_ynode *n, const char *path,
                  double *out)
 {
-    return drape_yread_quantity(r, n, path, DRAPE_DIM_FORCE_PER_LENGTH,
-                                "tensile stiffness", DRAPE_YREAD_POSITIVE, out);
+    if (drape_yread_quantity(r, n, path, DRAPE_DIM_FORCE_PER_LENGTH,
+                             "tensile stiffness", DRAPE_YREAD_POSITIVE, out))
+        return -1;
+    if (*out < DRAPE_FABRIC_K_LO || *out > DRAPE_FABRIC_K_HI)
+        drape_yread_warn(r, n, path,
+                         "%g N/m lies far outside the tensile stiffness of any "
+                         "textile (%g to %g N/m, docs/fabrics.md): check the "
+                         "value and its unit", *out, DRAPE_FABRIC_K_LO,
+                         DRAPE_FABRIC_K_HI);
+    return 0;
 }
 
 static int get_stiffness(const drape_yread *r, const drape_ynode *root,
@@ -754,12 +772,19 @@ int drape_fabric_load(const char *path, drape_fabric *out, drape_error *err,
     if ((n = drape_ynode_get(root, "source", NULL)) &&
         drape_yread_text(&r, n, "source", 0, f->source, sizeof f->source))
         goto out;
+    const drape_ynode *wn = NULL;
     if (drape_yread_req_quantity(&r, root, "", "weight",
                                  DRAPE_DIM_AREAL_DENSITY, "areal density",
                                  DRAPE_YREAD_POSITIVE, "weight: 200 g/m^2",
-                                 &f->weight, NULL) ||
-        get_stiffness(&r, root, f))
+                                 &f->weight, &wn))
         goto out;
+    if (f->weight < DRAPE_FABRIC_WEIGHT_LO || f->weight > DRAPE_FABRIC_WEIGHT_HI)
+        drape_yread_warn(&r, wn, "weight",
+                         "%g g/m^2 lies far outside the weight of any textile "
+                         "(%g to %g g/m^2, docs/fabrics.md): check the value "
+                         "and its unit", f->weight * 1e3,
+                         DRAPE_FABRIC_WEIGHT_LO * 1e3, DRAPE_FABRIC_WEIGHT_HI * 1e3);
+    if (get_stiffness(&r, root, f)) goto out;
 
     const drape_ynode *kes = drape_ynode_get(root, "kes", NULL);
     const drape_ynode *bend = drape_ynode_get(root, "bending", NULL);

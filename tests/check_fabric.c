@@ -5,6 +5,7 @@
  * (docs/fabrics.md), not against the loader's own output. */
 #include "drape/fabric.h"
 
+#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -733,6 +734,109 @@ START_TEST(test_alloc_failures)
 }
 END_TEST
 
+/* Collects the range warnings ("far outside") of a load. */
+typedef struct range_warnings {
+    int n;
+    drape_error w[4];
+} range_warnings;
+
+static void collect_range(void *ctx, const drape_error *w)
+{
+    range_warnings *rw = ctx;
+    if (strstr(w->msg, "far outside") && rw->n < 4) rw->w[rw->n++] = *w;
+}
+
+static int load_range(const char *text, range_warnings *rw)
+{
+    drape_fabric f;
+    drape_error err;
+    memset(rw, 0, sizeof *rw);
+    drape_error_clear(&err);
+    const char *p = tu_write_file("fabric.yaml", text);
+    int rc = drape_fabric_load(p, &f, &err, collect_range, rw);
+    ck_assert_msg(rc == 0, "%s: %s", err.key, err.msg); /* a warning, not an error */
+    return rw->n;
+}
+
+/* Values far outside any textile load, with a warning naming the key
+ * (docs/fabrics.md: weight 5..5000 g/m^2, tensile stiffness 1..1e7 N/m);
+ * the bounds themselves do not warn. */
+START_TEST(test_implausible_values)
+{
+    range_warnings rw;
+    ck_assert_int_eq(load_range("fabric: t\nweight: 20 g/cm^2\ntensile_stiffness: 1000 N/m\n"
+                                BEND P_ONE WEFT SHEAR, &rw), 1);
+    ck_assert_str_eq(rw.w[0].key, "weight");
+    ck_assert_int_eq(rw.w[0].kind, DRAPE_OK);
+    ck_assert_int_eq(rw.w[0].line, 2);
+    ck_assert_int_eq(rw.w[0].column, 9);
+    ck_assert_msg(strstr(rw.w[0].msg, "200000 g/m^2"), "%s", rw.w[0].msg);
+    ck_assert_int_eq(load_range("fabric: t\nweight: 1e300 g/m^2\ntensile_stiffness: 1e30 N/m\n"
+                                BEND P_ONE WEFT SHEAR, &rw), 2);
+    ck_assert_str_eq(rw.w[0].key, "weight");
+    ck_assert_str_eq(rw.w[1].key, "tensile_stiffness");
+    ck_assert_int_eq(rw.w[1].line, 3);
+    ck_assert_msg(strstr(rw.w[1].msg, "1e+30 N/m"), "%s", rw.w[1].msg);
+    ck_assert_int_eq(load_range("fabric: t\nweight: 1 g/m^2\n"
+                                "tensile_stiffness: {warp: 0.5 N/m, weft: 2e7 N/m}\n"
+                                BEND P_ONE WEFT SHEAR, &rw), 3);
+    ck_assert_str_eq(rw.w[0].key, "weight");
+    ck_assert_str_eq(rw.w[1].key, "tensile_stiffness.warp");
+    ck_assert_str_eq(rw.w[2].key, "tensile_stiffness.weft");
+    ck_assert_int_eq(load_range("fabric: t\nweight: 200 g/m^2\nk_warp: 1e8 N/m\n"
+                                "k_weft: 1000 N/m\n" BEND P_ONE WEFT SHEAR, &rw), 1);
+    ck_assert_str_eq(rw.w[0].key, "k_warp");
+    /* the bounds are inside */
+    ck_assert_int_eq(load_range("fabric: t\nweight: 5 g/m^2\n"
+                                "tensile_stiffness: {warp: 1 N/m, weft: 1e7 N/m}\n"
+                                BEND P_ONE WEFT SHEAR, &rw), 0);
+    ck_assert_int_eq(load_range("fabric: t\nweight: 5000 g/m^2\ntensile_stiffness: 1000 N/m\n"
+                                BEND P_ONE WEFT SHEAR, &rw), 0);
+    /* drape check prints it on stderr, and succeeds */
+    const char *p = tu_write_file("absurd.yaml", "fabric: t\nweight: 1e300 g/m^2\n"
+                                  "tensile_stiffness: 1e30 N/m\n" BEND P_ONE WEFT SHEAR);
+    char args[600], out[4096], err[4096];
+    snprintf(args, sizeof args, "check '%s'", p);
+    ck_assert_int_eq(tu_run_drape(args, out, sizeof out, err, sizeof err), 0);
+    ck_assert_msg(strstr(err, "absurd.yaml:2:9: weight: warning: 1e+300 g/m^2 lies far outside") &&
+                      strstr(err, "absurd.yaml:3:20: tensile_stiffness: warning: 1e+30 N/m"),
+                  "%s", err);
+}
+END_TEST
+
+/* No shipped fabric (fabrics/, and ../shared/examples/fabrics/ when that
+ * checkout is beside this one) is outside the plausible ranges. */
+START_TEST(test_shipped_fabrics_plausible)
+{
+    static const char *const dirs[] = {"fabrics", "../shared/examples/fabrics"};
+    int seen = 0;
+    for (int d = 0; d < 2; d++) {
+        char dir[600];
+        snprintf(dir, sizeof dir, "%s", tu_src(dirs[d]));
+        DIR *dp = opendir(dir);
+        ck_assert_msg(dp || d == 1, "cannot open %s", dir);
+        if (!dp) continue;
+        struct dirent *e;
+        while ((e = readdir(dp)) != NULL) {
+            size_t n = strlen(e->d_name);
+            if (n < 6 || strcmp(e->d_name + n - 5, ".yaml") != 0) continue;
+            char path[1200];
+            snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+            drape_fabric f;
+            drape_error err;
+            range_warnings rw = {0};
+            drape_error_clear(&err);
+            ck_assert_msg(drape_fabric_load(path, &f, &err, collect_range, &rw) == 0, "%s: %s",
+                          path, err.msg);
+            ck_assert_msg(rw.n == 0, "%s: %s: %s", path, rw.w[0].key, rw.w[0].msg);
+            seen++;
+        }
+        closedir(dp);
+    }
+    ck_assert_int_ge(seen, 9);
+}
+END_TEST
+
 Suite *fabric_suite(void); /* found by the runner */
 Suite *fabric_suite(void)
 {
@@ -755,6 +859,8 @@ Suite *fabric_suite(void)
     tcase_add_loop_test(tc, test_corpus, 0,
                         (int)(sizeof corpus / sizeof corpus[0]));
     tcase_add_test(tc, test_alloc_failures);
+    tcase_add_test(tc, test_implausible_values);
+    tcase_add_test(tc, test_shipped_fabrics_plausible);
     suite_add_tcase(s, tc);
     return s;
 }
