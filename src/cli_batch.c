@@ -20,6 +20,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <json-c/json.h>
+
 #include "cli.h"
 #include "cli_batch.h"
 #include "cli_data.h"
@@ -52,7 +54,8 @@ static const char batch_usage[] =
     "                       equilibrium, t_max or failed and run only the other\n"
     "                       fabrics (rows with status error or interrupted are\n"
     "                       run again; with --frames an interrupted run continues\n"
-    "                       from its checkpoint, `drape run --resume`); a fabric\n"
+    "                       from its checkpoint, an interrupted ensemble from its\n"
+    "                       manifest, `drape run --resume`); a fabric\n"
     "                       file changed since its row was made is run again, a\n"
     "                       changed scene file is refused (exit 2)\n"
     "  --frames             also write each run's frames to DIR/frames/NAME/\n"
@@ -138,6 +141,27 @@ static int checkpoint_is_for(const char *path, const char *fabric)
     return same;
 }
 
+/* 1 if DIR/ensemble.json (path) is the manifest of an ensemble of this
+ * fabric (the same file): an ensemble row's run, continued by `drape run
+ * --resume DIR` like a single run's checkpoint; 0 otherwise (none,
+ * unreadable, another fabric's: the row then runs again from the start). */
+static int ensemble_is_for(const char *path, const char *fabric)
+{
+    char buf[4096];
+    struct stat want, have;
+    drape_error e;
+    drape_error_clear(&e);
+    if (drape_cli_data_find(fabric, buf, sizeof buf, &e) != 0 || stat(buf, &want) != 0) return 0;
+    struct json_object *o = drape_cli_read_json(path, 1 << 20, &e), *v;
+    if (!o) return 0;
+    int same = json_object_object_get_ex(o, "fabric", &v) &&
+               json_object_is_type(v, json_type_string) &&
+               stat(json_object_get_string(v), &have) == 0 && have.st_dev == want.st_dev &&
+               have.st_ino == want.st_ino;
+    json_object_put(o);
+    return same;
+}
+
 static int launch(batch *b, job *jb, drape_error *err)
 {
     char out_path[BATCH_PATH_MAX], err_path[BATCH_PATH_MAX], frames[BATCH_PATH_MAX];
@@ -154,11 +178,13 @@ static int launch(batch *b, job *jb, drape_error *err)
     av[k++] = "--quiet";
     av[k++] = "-j"; /* the batch runs fabrics in parallel, each its specimens in turn */
     av[k++] = "1";
-    char ck[BATCH_PATH_MAX + 16];
+    char ck[BATCH_PATH_MAX + 16], man[BATCH_PATH_MAX + 16];
     snprintf(ck, sizeof ck, "%s/drape.h5", frames);
-    if (jb->cont && access(ck, F_OK) == 0 && checkpoint_is_for(ck, jb->fabric)) {
-        /* the options are stored in the checkpoint (batch.args made sure
-         * they are this batch's) */
+    snprintf(man, sizeof man, "%s/ensemble.json", frames);
+    if (jb->cont && ((access(ck, F_OK) == 0 && checkpoint_is_for(ck, jb->fabric)) ||
+                     (access(man, F_OK) == 0 && ensemble_is_for(man, jb->fabric)))) {
+        /* the options are stored in the checkpoint or the ensemble's
+         * manifest (batch.args made sure they are this batch's) */
         av[k++] = "--resume";
         av[k++] = frames;
     } else {

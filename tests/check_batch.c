@@ -754,6 +754,64 @@ START_TEST(test_killed_batch_stops_runs)
 }
 END_TEST
 
+/* A batch of an ensemble scene interrupted while a dynamic specimen runs:
+ * `batch --resume --frames` ran that fabric's whole ensemble again from
+ * the start (its specimen-001 frames rewritten).  It now continues it from
+ * its manifest, the interrupted specimen from its checkpoint. */
+START_TEST(test_resume_ensemble_row)
+{
+    const char *dir = subdir("ens-row");
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    char wait_for[1024], cmd[2400], f0[1024];
+    snprintf(wait_for, sizeof wait_for, "%s/frames/cotton-breen/specimen-001/frame_000002.obj",
+             dir);
+    snprintf(f0, sizeof f0, "%s/frames/cotton-breen/specimen-001/frame_000000.obj", dir);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    ck_assert_int_eq(system(cmd), 0);
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(bin, "drape", "batch", "-q", "../scenes/cusick.yaml", COTTON, "--spacing", "5cm",
+              "--method", "dynamic", "--specimens", "2", "--frames", "--out", dir,
+              (char *)NULL);
+        _exit(98);
+    }
+    struct timespec ts = {0, 1000 * 1000};
+    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
+        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("the batch ended before %s", wait_for);
+        nanosleep(&ts, NULL);
+    }
+    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
+    kill(pid, SIGTERM);
+    ck_assert_int_eq(waitpid(pid, NULL, 0), pid);
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 1);
+    ck_assert_str_eq(cell(t, 0, "status"), "interrupted");
+    struct stat st;
+    ck_assert_int_eq(stat(f0, &st), 0);
+    ino_t frame0 = st.st_ino;
+
+    char args[2400];
+    snprintf(args, sizeof args, "batch -q ../scenes/cusick.yaml %s --spacing 5cm --method "
+             "dynamic --specimens 2 --frames --out %s --resume", COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 1);
+    ck_assert_str_eq(cell(t, 0, "status"), "equilibrium");
+    ck_assert_str_eq(cell(t, 0, "specimens"), "2");
+    ck_assert_str_eq(cell(t, 0, "specimens_failed"), "0");
+    /* continued, not begun again: its first frame is the one written before */
+    ck_assert_int_eq(stat(f0, &st), 0);
+    ck_assert_msg(st.st_ino == frame0, "specimen-001 ran again from the start");
+    free(t);
+}
+END_TEST
+
 /* Two fabrics with one file name in two directories get the frame
  * directories a and a-2 in command-line order; a --resume that lists them
  * the other way round continued each from the other's checkpoint (rows
@@ -902,6 +960,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_interrupted_row_resumed);
     tcase_add_test(tc, test_resume_swapped_names);
     tcase_add_test(tc, test_killed_batch_stops_runs);
+    tcase_add_test(tc, test_resume_ensemble_row);
     tcase_add_test(tc, test_resume_changed_inputs);
     suite_add_tcase(s, tc);
     return s;
