@@ -117,6 +117,7 @@ typedef struct child {
     int have_res;
     double *radii;       /* its shadow outline, n_radii samples */
     int n_radii;
+    int shadow_whole;    /* its @shadow line was read whole */
     double cx, cy, thr;
 } child;
 
@@ -221,6 +222,8 @@ static void parse_child(child *c)
                 end = e2;
             }
             c->n_radii = k == n ? (int)n : 0;
+            /* (the line ends after its last sample: not cut short) */
+            c->shadow_whole = c->n_radii > 0 && *end == '\n';
         }
     }
     c->have_res = drape_cli_result_read(c->buf, &c->res) == 0 && c->res.n > 0;
@@ -416,12 +419,31 @@ out:
 
 /* ---- the record in DIR (--out) ------------------------------------------------- */
 
+/* 1 if a specimen's result is whole: every key a specimen sends
+ * (drape_cli_run_keys but the ensemble's own nodes_hist and specimens),
+ * its status a text, and with a DC its shadow's outline.  A result.txt
+ * cut short or edited is not (read back, it would count as a failed
+ * specimen, or give the ensemble's result nulls). */
+static int complete(const child *c)
+{
+    if (!c->have_res) return 0;
+    for (int i = 0; drape_cli_run_keys[i]; i++) {
+        const char *key = drape_cli_run_keys[i];
+        if (strcmp(key, "nodes_hist") != 0 && strcmp(key, "specimens") != 0 &&
+            !drape_cli_result_find(&c->res, key))
+            return 0;
+    }
+    const drape_cli_field *st = drape_cli_result_find(&c->res, "status");
+    if (st->type != DRAPE_CLI_F_STR || st->is_null_text) return 0;
+    return !isfinite(drape_cli_result_get(&c->res, "dc")) || c->shadow_whole;
+}
+
 /* A specimen whose result is kept: it is not run again by --resume (a
  * numerical failure is deterministic; an error without a result, an
  * interruption, are not kept). */
 static int spec_done(const child *c)
 {
-    return c->have_res && (spec_ok(c) || strcmp(spec_status(c), "failed") == 0);
+    return complete(c) && (spec_ok(c) || strcmp(spec_status(c), "failed") == 0);
 }
 
 /* --resume: the specimens of m read back (c->stored), or marked to
@@ -454,7 +476,7 @@ static int read_back(const ens_record *m, child *ch, int n)
             c->buf = NULL;
             c->radii = NULL;
             c->len = c->cap = 0;
-            c->n_radii = c->have_res = 0;
+            c->n_radii = c->have_res = c->shadow_whole = 0;
         }
         c->from_ck = drape_cli_ens_checkpoint(m, k, &c->cpu_s);
     }

@@ -312,6 +312,46 @@ START_TEST(test_resume_dynamic_interrupted)
 }
 END_TEST
 
+/* A result.txt cut short (or edited) is not a result: its specimen runs
+ * again, with a warning naming the file.  Cut at a line's end before its
+ * status line, a specimen was taken as failed (specimens_failed 1, and
+ * kept so: never run again); cut after it, the ensemble's result had
+ * nulls (method, terms, the energies...); its shadow's line cut short
+ * drew a wrong outline.  Found by a review editing result.txt by hand. */
+START_TEST(test_resume_damaged_result)
+{
+    char dir[600], args[1400], ref[CAP];
+    snprintf(dir, sizeof dir, "%s/ens-damaged", tu_scratch_dir());
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --specimens 3 -j 2 "
+             "--out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    memcpy(ref, out, sizeof ref);
+    json_object *r = parse(ref);
+    /* 1: up to the line before its status; 2: up to its status line; 3:
+     * its last 3 bytes (the @shadow line's last sample and newline) */
+    sh("cd %s && n=$(grep -n '^status\t' specimen-001/result.txt | cut -d: -f1) && "
+       "head -n $((n - 1)) specimen-001/result.txt > t && mv t specimen-001/result.txt && "
+       "head -n $n specimen-002/result.txt > t && mv t specimen-002/result.txt && "
+       "head -c -3 specimen-003/result.txt > t && mv t specimen-003/result.txt", dir);
+    sh("sed -i 's/\"status\":\"equilibrium\"/\"status\":\"interrupted\"/' %s/ensemble.json", dir);
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    for (int k = 1; k <= 3; k++) {
+        char name[700];
+        snprintf(name, sizeof name, "%s/specimen-%03d/result.txt: warning: not a result", dir, k);
+        ck_assert_msg(strstr(err, name), "no warning for specimen %d: %s", k, err);
+    }
+    json_object *g = parse(out);
+    assert_same_ensemble(r, g);
+    /* stored whole again */
+    sh("cd %s && for k in 1 2 3; do f=specimen-00$k/result.txt; grep -q '^status\ts\t' $f && "
+       "grep -q '^@shadow\t' $f && test \"$(tail -c 1 $f | od -An -c | tr -d ' ')\" = '\\n' "
+       "|| exit 1; done", dir);
+    json_object_put(g);
+    json_object_put(r);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -320,6 +360,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(tc, test_resume_fall);
     tcase_add_test(tc, test_resume_refused);
     tcase_add_test(tc, test_resume_dynamic_interrupted);
+    tcase_add_test(tc, test_resume_damaged_result);
     suite_add_tcase(s, tc);
     return s;
 }
