@@ -583,10 +583,11 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
             goto fail;
         }
         /* the time of the parts before; at least that of the specimens
-         * kept (a part killed outright did not record its own) */
+         * kept and of the checkpoints continued (their time so far: a
+         * part killed outright did not record its own) */
         double cpu_kept = 0.0;
         for (int k = 0; k < n; k++)
-            if (ch[k].stored && ch[k].cpu_s > 0) cpu_kept += ch[k].cpu_s;
+            if ((ch[k].stored || ch[k].from_ck) && ch[k].cpu_s > 0) cpu_kept += ch[k].cpu_s;
         cpu_prev = m->cpu_s > cpu_kept ? m->cpu_s : cpu_kept;
         wall_prev = m->wall_s;
     }

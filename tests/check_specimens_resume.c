@@ -352,6 +352,59 @@ START_TEST(test_resume_damaged_result)
 }
 END_TEST
 
+/* A dynamic ensemble whose process is killed outright (SIGKILL: it
+ * records nothing, and its specimens stop at once, each leaving its
+ * checkpoint) and resumed: the result's cpu_s counts the time the
+ * specimens ran before too, as each specimen's cpu_s does (it counted
+ * only that of the resumed part: 1.8 s against specimens of 2.0 and
+ * 2.3 s).  Found by a review killing the ensemble with kill -9. */
+START_TEST(test_resume_killed_cpu)
+{
+    char dir[600], wait_for[700], args[1400];
+    snprintf(dir, sizeof dir, "%s/ens-killed", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/specimen-001/frame_000002.obj", dir);
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        setpgid(0, 0); /* its specimens with it, to wait for them */
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
+              "dynamic", "--specimens", "2", "-j", "2", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    setpgid(pid, pid);
+    struct timespec ts = {0, 1000 * 1000};
+    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
+        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", wait_for);
+        nanosleep(&ts, NULL);
+    }
+    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
+    /* (a little CPU time in both specimens) */
+    struct timespec more = {0, 300 * 1000 * 1000};
+    nanosleep(&more, NULL);
+    kill(pid, SIGKILL);
+    int ws;
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    for (int i = 0; i < 30000 && kill(-pid, 0) == 0; i++) nanosleep(&ts, NULL);
+    ck_assert_msg(kill(-pid, 0) != 0, "the specimens did not stop with the ensemble");
+    sh("grep -q '\"status\":\"running\"' %s/ensemble.json && test -f %s/specimen-001/drape.h5 && "
+       "test -f %s/specimen-002/drape.h5", dir, dir, dir);
+
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    json_object *g = parse(out), *sp;
+    ck_assert_str_eq(jstr(g, "status"), "equilibrium");
+    ck_assert(json_object_object_get_ex(g, "specimens", &sp));
+    double cpu = 0;
+    for (int k = 0; k < 2; k++) cpu += jnum(json_object_array_get_idx(sp, (size_t)k), "cpu_s");
+    ck_assert_msg(jnum(g, "cpu_s") >= 0.95 * cpu, "cpu_s %g, specimens %g", jnum(g, "cpu_s"), cpu);
+    json_object_put(g);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -361,6 +414,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(tc, test_resume_refused);
     tcase_add_test(tc, test_resume_dynamic_interrupted);
     tcase_add_test(tc, test_resume_damaged_result);
+    tcase_add_test(tc, test_resume_killed_cpu);
     suite_add_tcase(s, tc);
     return s;
 }
