@@ -330,17 +330,19 @@ static int read_manifest(const char *dir, ens_record *m, run_args *ra, drape_err
     json_object *n = member(o, "specimens", json_type_int);
     json_object *seed = member(o, "seed", json_type_int);
     json_object *status = member(o, "status", json_type_string);
+    json_object *parts = member(o, "parts", json_type_int);
     json_object *cpu = member(o, "cpu_s", json_type_double);
     json_object *wall = member(o, "wall_s", json_type_double);
     if (!cpu) cpu = member(o, "cpu_s", json_type_int);
     if (!wall) wall = member(o, "wall_s", json_type_int);
     if (!fmt || !id || !scene || !ssum || !fabric || !fsum || !given || !opts || !n || !seed ||
-        !status || !cpu || !wall)
+        !status || !parts || !cpu || !wall)
         return damaged(m->path, "a member is missing or of another type", err);
     if (json_object_get_int(fmt) != ENS_FORMAT)
         return damaged(m->path, "drape_ensemble is not 1", err);
     int64_t nv = json_object_get_int64(n), sv = json_object_get_int64(seed);
-    if (nv < 2 || nv > DRAPE_SCENE_SPECIMENS_MAX || sv < 0 ||
+    int64_t pv = json_object_get_int64(parts);
+    if (nv < 2 || nv > DRAPE_SCENE_SPECIMENS_MAX || sv < 0 || pv < 0 || pv >= INT_MAX ||
         (uint64_t)sv + (uint64_t)nv - 1 > (uint64_t)DRAPE_SCENE_SEED_MAX ||
         strlen(json_object_get_string(id)) >= sizeof m->id ||
         strlen(json_object_get_string(status)) >= sizeof m->status ||
@@ -352,8 +354,8 @@ static int read_manifest(const char *dir, ens_record *m, run_args *ra, drape_err
     m->seed0 = (unsigned long)sv;
     m->cpu_s = json_object_get_double(cpu);
     m->wall_s = json_object_get_double(wall);
-    if (!(m->cpu_s >= 0)) m->cpu_s = 0;
-    if (!(m->wall_s >= 0)) m->wall_s = 0;
+    if (!(m->cpu_s >= 0) || !isfinite(m->cpu_s)) m->cpu_s = 0;
+    if (!(m->wall_s >= 0) || !isfinite(m->wall_s)) m->wall_s = 0;
     m->resuming = 1;
     /* the options, set as the command line set them */
     drape_cli_run_args_init(ra);

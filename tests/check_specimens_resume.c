@@ -167,7 +167,8 @@ END_TEST
 
 /* --resume refuses, naming the file, exit status as documented, and
  * writes nothing: a scene file edited since the ensemble started (1), a
- * fabric file too (1), a damaged manifest (3), a directory of specimens
+ * fabric file too (1), a damaged manifest (3: cut short, a member of
+ * another type, a value out of range), a directory of specimens
  * without a manifest (3), run options with --resume (2). */
 START_TEST(test_resume_refused)
 {
@@ -215,6 +216,16 @@ START_TEST(test_resume_refused)
        dir, dir);
     st = tu_run_drape(args, out, CAP, err, CAP);
     ck_assert_msg(st == 3 && strstr(err, "ensemble.json"), "exit %d, %s", st, err);
+    /* parts out of range (its count at the end of the part overflowed an
+     * int: undefined behaviour, found by a review under UBSan) */
+    sh("sed 's/\"parts\":1/\"parts\":99999999999/' %s/../manifest.before > %s/ensemble.json "
+       "&& grep -q 99999999999 %s/ensemble.json && cp %s/ensemble.json %s/../manifest.parts", dir,
+       dir, dir, dir, dir);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 3 && out[0] == 0 && strstr(err, "ensemble.json") &&
+                      strstr(err, "out of range"), "exit %d, %s", st, err);
+    sh("cmp %s/ensemble.json %s/../manifest.parts && test ! -e %s/specimen-003/result.txt", dir,
+       dir, dir);
     /* no manifest */
     sh("rm %s/ensemble.json", dir);
     st = tu_run_drape(args, out, CAP, err, CAP);
