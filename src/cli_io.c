@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #ifdef __linux__
 #include <sys/prctl.h>
@@ -343,6 +344,25 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err)
                                "--out: cannot create directory: %s", strerror(errno));
     if (created) *created = 1;
     return 0;
+}
+
+int drape_cli_lock_dir(const char *dir, drape_error *err)
+{
+    /* kept open (and locked) until the process exits */
+    int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: cannot open: %s",
+                               strerror(errno));
+    if (flock(fd, LOCK_EX | LOCK_NB) == 0) return 0;
+    int e = errno;
+    close(fd);
+    if (e == EWOULDBLOCK)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "--out: another drape run is writing into this directory "
+                               "(a run, an ensemble or a --resume that has not ended): "
+                               "wait for it, or give another --out");
+    return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "--out: cannot lock: %s",
+                           strerror(e));
 }
 
 int drape_cli_check_target(const char *dir, const char *name, drape_error *err)

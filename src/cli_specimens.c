@@ -591,7 +591,9 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         cpu_prev = m->cpu_s > cpu_kept ? m->cpu_s : cpu_kept;
         wall_prev = m->wall_s;
     }
-    if (a->out_dir && drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0) goto fail;
+    if (a->out_dir && (drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0 ||
+                       drape_cli_lock_dir(a->out_dir, &err) != 0))
+        goto fail;
     if (a->out_dir && !a->no_warnings && !resuming) { /* an earlier, larger ensemble's specimens */
         char sd[4200];
         struct stat sst;

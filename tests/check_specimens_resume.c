@@ -416,6 +416,52 @@ START_TEST(test_resume_killed_cpu)
 }
 END_TEST
 
+/* A second writer into a directory that an ensemble still writes (a cron
+ * job's --resume while the last one runs, a second run with the same
+ * --out): both ran every specimen into the same files and exited 0.  It
+ * is now refused (exit 3) while the first holds the directory. */
+START_TEST(test_dir_in_use)
+{
+    char dir[600], wait_for[700], args[1400];
+    snprintf(dir, sizeof dir, "%s/ens-in-use", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/specimen-001/frame_000002.obj", dir);
+    sh("rm -rf %s", dir);
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
+              "dynamic", "--specimens", "2", "-j", "1", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    struct timespec ts = {0, 1000 * 1000};
+    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
+        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", wait_for);
+        nanosleep(&ts, NULL);
+    }
+    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
+    snprintf(args, sizeof args, "run -q --resume %s", dir);
+    int st1 = tu_run_drape(args, out, CAP, err, CAP);
+    int in_use1 = strstr(err, "another drape run is writing") != NULL;
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 5cm --method static "
+             "--specimens 1 --out %s", dir);
+    int st2 = tu_run_drape(args, out, CAP, err, CAP);
+    int in_use2 = strstr(err, "another drape run is writing") != NULL;
+    int running = waitpid(pid, NULL, WNOHANG) == 0;
+    kill(pid, SIGTERM);
+    waitpid(pid, NULL, 0);
+    ck_assert_msg(running, "the first run ended before the second ones were tried");
+    ck_assert_msg(st1 == 3 && in_use1 && out[0] == 0, "--resume: exit %d", st1);
+    ck_assert_msg(st2 == 3 && in_use2 && out[0] == 0, "second run: exit %d, %s", st2, err);
+    /* the first run's directory and files are its own: its specimen 2 was
+     * never started by the refused --resume */
+    sh("test ! -e %s/specimen-002 && test ! -e %s/specimen-001/result.txt", dir, dir);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -426,6 +472,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(tc, test_resume_dynamic_interrupted);
     tcase_add_test(tc, test_resume_damaged_result);
     tcase_add_test(tc, test_resume_killed_cpu);
+    tcase_add_test(tc, test_dir_in_use);
     suite_add_tcase(s, tc);
     return s;
 }
