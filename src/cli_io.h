@@ -30,7 +30,8 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
  * directory itself, shared with forked children; nothing is written): a
  * second drape run, ensemble or --resume with --out DIR while the first
  * still writes there is refused with an E_IO error naming DIR, instead
- * of both writing the same files.  0, or -1 and err. */
+ * of both writing the same files.  Where the file system cannot lock a
+ * directory (NFS) the run goes unguarded.  0, or -1 and err. */
 int drape_cli_lock_dir(const char *dir, drape_error *err);
 /* DIR/NAME can be replaced by a file at the end of a run: it does not
  * exist or is not a directory.  0, or -1 with an E_IO error. */
