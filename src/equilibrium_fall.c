@@ -449,8 +449,10 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
         if (ke > ke_max) ke_max = ke;
         else if (ke < 0.5 * ke_max) ke_fell = 1;
         if ((long_step || t_retry < INFINITY) && e_now < e_low) e_low = e_now;
+        /* the peak is the longer steps' guard's scale too (the fold
+         * phase's guard acts without the swing criterion) */
+        if (ke > ke_peak) ke_peak = ke;
         if (ke_frac > 0.0) {
-            if (ke > ke_peak) ke_peak = ke;
             ring[iw] = ke;
             ring_t[iw] = t;
             iw = (iw + 1) % nwin;

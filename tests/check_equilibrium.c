@@ -748,6 +748,53 @@ START_TEST(test_fall_fold)
 }
 END_TEST
 
+/* The guard on the longer step after the fold phase refuses it when it
+ * raises the total energy by more than 1 % of the peak kinetic energy
+ * (equilibrium.h, docs/ensemble.md, "A guard on the step after the fold
+ * phase"), whether or not the swing criterion (dyn_ke_frac) is on: that
+ * criterion acts only past dyn_time, so a fall that ends at dyn_time
+ * (dyn_time_max = dyn_time) is the same with it as without it.  The chain
+ * released horizontally, 0.1 s at 1 ms then 0.3 s at 2 ms: 100 + 150
+ * steps, none refused.  Before this was fixed the peak kinetic
+ * energy was recorded only with the swing criterion on, so without it
+ * the guard refused any rise at all (here the first 2 ms step: 336 steps,
+ * 1 refused). */
+START_TEST(test_fall_fold_guard_without_swing)
+{
+    const double dir[3] = {1.0, 0.0, 0.0};
+    drape_lattice *L = chain_new(dir);
+    drape_model *m = chain_model(L);
+    drape_error err;
+    drape_error_clear(&err);
+    drape_equilibrium_result r[2];
+    for (int c = 0; c < 2; c++) {
+        drape_equilibrium_opts o;
+        drape_equilibrium_opts_default(&o);
+        o.dyn_time = 0.4;
+        o.dyn_dt = 0.002;
+        o.dyn_time_fold = 0.1;
+        o.dyn_dt_fold = 0.001;
+        o.dyn_only = 1;
+        if (c == 1) { /* the swing criterion on, but no time to act */
+            o.dyn_ke_frac = 1e-12;
+            o.dyn_time_max = o.dyn_time;
+        }
+        ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r[c], &err) == 0, "%s", err.msg);
+        ck_assert_int_eq(r[c].status, DRAPE_EQ_DYN_ONLY);
+        ck_assert_double_eq_tol(r[c].dyn_end, 0.4, 1e-12);
+    }
+    for (int c = 0; c < 2; c++) {
+        ck_assert_msg(r[c].dyn_steps == 250 && r[c].dyn_refused == 0,
+                      "swing criterion %s: %d steps, %d refused", c ? "on" : "off",
+                      r[c].dyn_steps, r[c].dyn_refused);
+    }
+    for (int k = 0; k < 3 * L->n; k++) ck_assert(r[0].x[k] == r[1].x[k]);
+    for (int c = 0; c < 2; c++) drape_equilibrium_result_free(&r[c]);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* The fall's step chosen by its error (dyn_tol): the chain released
  * horizontally swings down for 0.2 s (the fall is cut at dyn_time, so it
  * ends there), against cvode-bdf at rtol 1e-10.  The control keeps the
@@ -801,6 +848,7 @@ Suite *equilibrium_suite(void)
     tcase_add_test(tc, test_fall_swing);
     tcase_add_test(tc, test_fall_swing_step);
     tcase_add_test(tc, test_fall_fold);
+    tcase_add_test(tc, test_fall_fold_guard_without_swing);
     tcase_add_test(tc, test_fall_tol);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);
