@@ -170,8 +170,9 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
      * does not end the fall: a ring of the last nwin steps' (t, E_kin),
      * enough for tw at the shortest step */
     double h_short = adaptive ? h_min : fmin(fmin(h, o->dyn_dt), h_swing > 0.0 ? h_swing : h);
-    int nwin = (int)ceil(tw / h_short) + 1, iw = 0;
-    if (nwin > DRAPE_EQ_KE_WINDOW_MAX) nwin = DRAPE_EQ_KE_WINDOW_MAX;
+    /* capped before the conversion: tw / h_short can exceed any int */
+    double nw = ceil(tw / h_short) + 1.0;
+    int nwin = nw < DRAPE_EQ_KE_WINDOW_MAX ? (int)nw : DRAPE_EQ_KE_WINDOW_MAX, iw = 0;
     double *ring = drape_malloc(2 * (size_t)nwin * sizeof(double)), *ring_t = ring + nwin;
     if (!ring)
         return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");

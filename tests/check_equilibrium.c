@@ -795,6 +795,41 @@ START_TEST(test_fall_fold_guard_without_swing)
 }
 END_TEST
 
+/* A fall of very many steps (dyn_time / dyn_dt beyond the range of an int:
+ * `drape run --fall-time 1e6s --fall-step 0.1ms`) is a valid request; with
+ * the stop raised before the call it ends at once as interrupted.  The
+ * swing criterion's window of steps (tw / h) was converted to int before
+ * it was capped: undefined behaviour (UBSan float-cast-overflow), on x86
+ * a negative count and a false "out of memory". */
+START_TEST(test_fall_many_steps)
+{
+    const double dir[3] = {1.0, 0.0, 0.0};
+    drape_lattice *L = chain_new(dir);
+    drape_model *m = chain_model(L);
+    static volatile sig_atomic_t stop = 1;
+    const double cases[3][2] = {{1e6, 1e-4}, {1e6, 1e-5}, {1e300, 1e-300}};
+    for (int c = 0; c < 3; c++) {
+        drape_equilibrium_opts o;
+        drape_equilibrium_opts_default(&o);
+        o.dyn_time = cases[c][0];
+        o.dyn_dt = cases[c][1];
+        o.dyn_ke_frac = 0.02;
+        o.stop = &stop;
+        drape_equilibrium_result r;
+        drape_error err;
+        drape_error_clear(&err);
+        int rc = drape_equilibrium_solve(m, L->xinit, &o, &r, &err);
+        ck_assert_msg(rc == 0, "dyn_time %g, dyn_dt %g: %s", o.dyn_time, o.dyn_dt, err.msg);
+        ck_assert_int_eq(r.status, DRAPE_EQ_INTERRUPTED);
+        ck_assert_int_eq(r.dyn_steps, 0);
+        ck_assert_int_eq(r.certified, -1);
+        drape_equilibrium_result_free(&r);
+    }
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* The fall's step chosen by its error (dyn_tol): the chain released
  * horizontally swings down for 0.2 s (the fall is cut at dyn_time, so it
  * ends there), against cvode-bdf at rtol 1e-10.  The control keeps the
@@ -849,6 +884,7 @@ Suite *equilibrium_suite(void)
     tcase_add_test(tc, test_fall_swing_step);
     tcase_add_test(tc, test_fall_fold);
     tcase_add_test(tc, test_fall_fold_guard_without_swing);
+    tcase_add_test(tc, test_fall_many_steps);
     tcase_add_test(tc, test_fall_tol);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);
