@@ -245,6 +245,12 @@ int eq_factorize(eq_work *w, drape_error *err)
     for (long k = 0; k < anz; k++) apx[k] = w->ax[src[k]];
     int ok = cholmod_l_factorize(w->A, w->LF, &w->c);
     if (w->c.status == CHOLMOD_NOT_POSDEF) return 0;
+    if (w->c.status == CHOLMOD_OUT_OF_MEMORY) { /* not the matrix's fault */
+        drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL,
+                        "out of memory in the equilibrium solver's factorisation "
+                        "(%ld unknowns)", w->N);
+        return -1;
+    }
     if (!ok || w->c.status < CHOLMOD_OK) {
         drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                         "equilibrium: CHOLMOD factorisation failed (status %d)",
@@ -262,6 +268,10 @@ int eq_solve(eq_work *w, const double *rhs, double *out, drape_error *err)
     for (long k = 0; k < w->N; k++) b[k] = rhs[w->perm[k]];
     if (!cholmod_l_solve2(CHOLMOD_A, w->LF, w->B, NULL, &w->X, NULL, &w->Y, &w->E,
                           &w->c)) {
+        if (w->c.status == CHOLMOD_OUT_OF_MEMORY)
+            return drape_error_set(err, DRAPE_E_NOMEM, NULL, 0, 0, NULL,
+                                   "out of memory in the equilibrium solver's solve "
+                                   "(%ld unknowns)", w->N);
         return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                                "equilibrium: CHOLMOD solve failed (status %d)",
                                w->c.status);

@@ -33,6 +33,8 @@
 #include "drape/units.h"
 #include "testutil.h"
 
+#include <SuiteSparse_config.h>
+
 #define CHAIN_N 10        /* particles, the first pinned */
 #define CHAIN_SIGMA 0.02  /* m */
 #define CHAIN_K 50.0      /* N/m */
@@ -476,6 +478,73 @@ START_TEST(test_alloc_failures)
 }
 END_TEST
 
+/* CHOLMOD's allocations (through SuiteSparse_config, outside drape's hook)
+ * failing from the k-th on: every failure is E_NOMEM (exit 5), whichever
+ * CHOLMOD call meets it (the analysis, the factorisations of the fall and of
+ * the static solve, the solves).  Until this was fixed a factorisation or
+ * solve that ran out of memory was reported as E_NUMERIC ("CHOLMOD
+ * factorisation failed (status -2)", exit 4), as though the matrix were at
+ * fault; only the analysis mapped it to E_NOMEM. */
+static long ss_fail_after = -1; /* allocations left before they fail; -1 never
+                                   (the hooks stay installed, passing through) */
+static int ss_take(void)
+{
+    if (ss_fail_after == 0) return 0;
+    if (ss_fail_after > 0) ss_fail_after--;
+    return 1;
+}
+static void *ss_malloc(size_t n) { return ss_take() ? malloc(n) : NULL; }
+static void *ss_calloc(size_t n, size_t s) { return ss_take() ? calloc(n, s) : NULL; }
+static void *ss_realloc(void *p, size_t n) { return ss_take() ? realloc(p, n) : NULL; }
+
+START_TEST(test_cholmod_alloc_failures)
+{
+    const double dir[3] = {1.0, 0.0, 0.0};
+    drape_lattice *L = chain_new(dir);
+    drape_model *m = chain_model(L);
+#if SUITESPARSE_MAIN_VERSION >= 7
+    SuiteSparse_config_malloc_func_set(ss_malloc);
+    SuiteSparse_config_calloc_func_set(ss_calloc);
+    SuiteSparse_config_realloc_func_set(ss_realloc);
+#else
+    SuiteSparse_config.malloc_func = ss_malloc;
+    SuiteSparse_config.calloc_func = ss_calloc;
+    SuiteSparse_config.realloc_func = ss_realloc;
+#endif
+    int failed = 0, numeric = 0;
+    long k;
+    for (k = 0; k < 1000; k++) {
+        drape_equilibrium_opts o;
+        drape_equilibrium_opts_default(&o);
+        o.clamp_k[0] = o.clamp_k[1] = CHAIN_K;
+        if (_i == 1) { /* the fall first */
+            o.dyn_time = 0.05;
+            o.dyn_dt = 0.005;
+        }
+        drape_equilibrium_result r;
+        drape_error err;
+        drape_error_clear(&err);
+        ss_fail_after = k;
+        int rc = drape_equilibrium_solve(m, L->xinit, &o, &r, &err);
+        ss_fail_after = -1;
+        drape_equilibrium_result_free(&r);
+        if (rc == 0) break;
+        failed++;
+        if (err.kind != DRAPE_E_NOMEM) {
+            if (!numeric) fprintf(stderr, "CHOLMOD allocation %ld failing: kind %d, %s\n", k,
+                                  (int)err.kind, err.msg);
+            numeric++;
+        }
+    }
+    ck_assert_msg(k < 1000, "no success with 1000 CHOLMOD allocations");
+    ck_assert_int_ge(failed, 10);
+    ck_assert_msg(numeric == 0, "%d of %d CHOLMOD allocation failures not E_NOMEM", numeric,
+                  failed);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* (c) Cusick at 2 cm: equilibrium DC against the dynamic run's */
 START_TEST(test_cusick_2cm_matches_dynamics)
 {
@@ -888,6 +957,7 @@ Suite *equilibrium_suite(void)
     tcase_add_test(tc, test_fall_tol);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);
+    tcase_add_loop_test(tc, test_cholmod_alloc_failures, 0, 2);
     suite_add_tcase(s, tc);
     tc = tcase_create("scenes");
     tcase_set_timeout(tc, 120);

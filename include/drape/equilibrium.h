@@ -217,7 +217,8 @@ typedef struct drape_equilibrium_result {
  * keep their x0 positions).  o may be NULL (defaults).  Returns 0 when a
  * result was produced (status converged, max_iters or stalled: check
  * r->status and r->certified), or -1 with err set: E_INPUT (bad options; no
- * gravity and no force_ref), E_NOMEM, E_NUMERIC (non-finite start; a start
+ * gravity and no force_ref), E_NOMEM (drape's allocations or CHOLMOD's),
+ * E_NUMERIC (non-finite start; a start
  * or a Hessian the model cannot evaluate: folded hinge or corner,
  * zero-length edge; a CHOLMOD failure).  r is always initialised: call
  * drape_equilibrium_result_free on it in every case.  Runs on the calling
