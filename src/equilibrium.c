@@ -678,10 +678,11 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
                         "or corner, or zero-length edge)");
         goto out;
     }
-    if (w.nf == 0) {
-        r->status = DRAPE_EQ_CONVERGED;
+    if (w.nf == 0) { /* nothing moves: at rest, a minimum (an empty Hessian) */
+        int dyn_only = o.dyn_time > 0.0 && o.dyn_only;
+        r->status = dyn_only ? DRAPE_EQ_DYN_ONLY : DRAPE_EQ_CONVERGED;
         r->max_force_rel = 0.0;
-        r->certified = 1;
+        r->certified = o.certify && !dyn_only ? 1 : -1; /* -1: not checked */
         rc = 0;
         goto done;
     }

@@ -453,6 +453,47 @@ START_TEST(test_bad_input)
 }
 END_TEST
 
+/* No free particle (the chain pinned everywhere): nothing moves, so the
+ * start is the result, converged, and a minimum when certification is
+ * asked for; not checked (-1) when it is not (certify = 0) or when only the
+ * fall is asked for (dyn_only: status dyn_only, as with free particles).
+ * Until this was fixed both were reported certified 1, and dyn_only as
+ * converged. */
+START_TEST(test_no_free_particles)
+{
+    const double dir[3] = {1.0, 0.0, 0.0};
+    drape_lattice *L = chain_new(dir);
+    for (int i = 0; i < L->n; i++) {
+        L->fixed[i] = 1;
+        L->free_id[i] = -1;
+    }
+    L->n_free = 0;
+    drape_model *m = chain_model(L);
+    for (int c = 0; c < 3; c++) { /* default; certify 0; dyn_only */
+        drape_equilibrium_opts o;
+        drape_equilibrium_opts_default(&o);
+        if (c == 1) o.certify = 0;
+        if (c == 2) {
+            o.dyn_time = 0.1;
+            o.dyn_dt = 0.01;
+            o.dyn_only = 1;
+        }
+        drape_equilibrium_result r;
+        drape_error err;
+        drape_error_clear(&err);
+        ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r, &err) == 0, "%s", err.msg);
+        ck_assert_int_eq(r.status, (c == 2 ? DRAPE_EQ_DYN_ONLY : DRAPE_EQ_CONVERGED));
+        ck_assert_int_eq(r.certified, (c == 0 ? 1 : -1));
+        ck_assert_int_eq(r.iterations, 0);
+        ck_assert(r.max_force_rel == 0.0);
+        for (int k = 0; k < 3 * L->n; k++) ck_assert(r.x[k] == L->xinit[k]);
+        drape_equilibrium_result_free(&r);
+    }
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* every allocation failure is reported as E_NOMEM and leaks nothing */
 START_TEST(test_alloc_failures)
 {
@@ -957,6 +998,7 @@ Suite *equilibrium_suite(void)
     tcase_add_test(tc, test_fall_tol);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);
+    tcase_add_test(tc, test_no_free_particles);
     tcase_add_loop_test(tc, test_cholmod_alloc_failures, 0, 2);
     suite_add_tcase(s, tc);
     tc = tcase_create("scenes");
