@@ -26,7 +26,6 @@
  * drape_fabric_load, and only then renamed into place; if any input is
  * bad, no file is written (docs/batch.md, "Importers"). */
 #include <errno.h>
-#include <float.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -42,6 +41,7 @@
 #include "cli.h"
 #include "cli_io.h"
 #include "drape/alloc.h"
+#include "drape/units.h"
 #include "drape/fabric.h"
 
 static const char import_usage[] =
@@ -738,9 +738,9 @@ static void kes_row(importer *im, const char *file, const drape_cli_csv_rec *r,
         }
         if (!plain_number(cell[k])) ROW_ERR(k, "expected a number in %s, got \"%s\"",
                                             kes_cols[k].unit, cell[k]);
-        errno = 0;
-        v[k] = strtod(cell[k], NULL);
-        if (errno == ERANGE || !isfinite(v[k]) || (v[k] != 0.0 && fabs(v[k]) < DBL_MIN))
+        int range;
+        v[k] = drape_units_strtod(cell[k], NULL, &range);
+        if (range)
             ROW_ERR(k, "number out of range: %s", cell[k]);
         if (kes_cols[k].positive ? !(v[k] > 0) : !(v[k] >= 0))
             ROW_ERR(k, "must be %s, got %s", kes_cols[k].positive ? "positive" : "non-negative",

@@ -4,7 +4,6 @@
  * from a checkpoint (cli_run.c), or one specimen or an ensemble
  * (cli_specimens.c).  The run itself is cli_run.c. */
 #include <errno.h>
-#include <float.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -269,10 +268,9 @@ int drape_cli_run_option(run_args *ra, const char *name, const char *text, char 
     }
     if (IS("--fall-swing")) {
         char *end;
-        errno = 0;
-        v = strtod(text, &end);
-        if (*end || end == text || !(v >= 0.0 && v < 1.0) || errno == ERANGE ||
-            (v != 0.0 && v < DBL_MIN))
+        int range;
+        v = drape_units_strtod(text, &end, &range);
+        if (*end || end == text || !(v >= 0.0 && v < 1.0) || range)
             return WHY("--fall-swing: expected a fraction in [0, 1), got `%s'", text);
         return ra->fall_swing = v, 0;
     }
@@ -360,7 +358,9 @@ int drape_cli_run_option_same(const char *name, const char *a, const char *b)
     if (drape_cli_run_option(&x, name, a, why, sizeof why) != 0 ||
         drape_cli_run_option(&y, name, b, why, sizeof why) != 0)
         return 0;
-    /* every field drape_cli_run_option sets (the others stay 0 in both) */
+    /* every field drape_cli_run_option sets (the others stay 0 in both);
+     * field by field, not memcmp: integrator and form point into the two
+     * texts.  An option added to drape_cli_run_option belongs here too */
     return same_text(x.integrator, y.integrator) && same_text(x.form, y.form) &&
            x.rtol == y.rtol && x.atol == y.atol && x.spacing == y.spacing &&
            x.t_max == y.t_max && x.strain_limit == y.strain_limit &&

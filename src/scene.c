@@ -20,7 +20,6 @@
 
 #include <errno.h>
 #include <ctype.h>
-#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -165,10 +164,9 @@ static int parse_direction(const drape_yread *c, const drape_ynode *v, drape_sce
         int plain = v->scalar[0] != 0;
         for (const char *p = v->scalar; *p && plain; p++)
             if (!strchr("0123456789.eE+-", *p)) plain = 0;
-        errno = 0;
-        deg = plain ? strtod(v->scalar, &end) : 0.0;
-        if (plain && end != v->scalar && !*end &&
-            (errno == ERANGE || (deg != 0.0 && fabs(deg) < DBL_MIN)))
+        int range = 0;
+        deg = plain ? drape_units_strtod(v->scalar, &end, &range) : 0.0;
+        if (plain && end != v->scalar && !*end && range)
             return drape_yread_error(c, v, path, DRAPE_E_INPUT,
                                      "number out of range: \"%s\"", v->scalar);
         if (!plain || end == v->scalar || *end) { /* a quantity with an angle unit */

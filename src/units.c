@@ -202,17 +202,23 @@ static size_t scan_decimal(const char *s, int allow_sign)
  * range: no quantity drape reads is meant to be 1e-400 or 1e-310, and
  * taking it as 0 would pass checks such as "non-negative".  An exact zero
  * ("0", "0e-400") is zero. */
+double drape_units_strtod(const char *s, char **end, int *range)
+{
+    errno = 0;
+    double v = strtod(s, end);
+    *range = errno == ERANGE || !isfinite(v) || (v != 0.0 && fabs(v) < DBL_MIN);
+    return v;
+}
+
 static double to_double(const char *s, size_t n)
 {
     char buf[128];
     if (n >= sizeof buf) return NAN; /* absurdly long literal */
     memcpy(buf, s, n);
     buf[n] = 0;
-    errno = 0;
-    double v = strtod(buf, NULL);
-    if (errno == ERANGE || !isfinite(v) || (v != 0.0 && fabs(v) < DBL_MIN))
-        return NAN;
-    return v;
+    int range;
+    double v = drape_units_strtod(buf, NULL, &range);
+    return range ? NAN : v;
 }
 
 /* A nonzero result that underflowed in arithmetic (below DBL_MIN). */

@@ -4,7 +4,6 @@
 
 #include <ctype.h>
 #include <errno.h>
-#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -212,15 +211,13 @@ int drape_yread_number(const drape_yread *r, const drape_ynode *n, const char *p
     for (const char *p = s; *p && ok; p++)
         if (!isdigit((unsigned char)*p) && !strchr(".eE+-", *p))
             ok = 0; /* no hex, inf, nan, units */
-    errno = 0;
-    double v = ok ? strtod(s, &end) : 0.0;
-    int range = errno == ERANGE;
+    int range = 0;
+    double v = ok ? drape_units_strtod(s, &end, &range) : 0.0;
     if (!ok || end == s || *end != 0)
         return drape_yread_error(r, n, path, DRAPE_E_INPUT, "expected %s, got \"%s\"",
                                  expected, s);
-    /* overflow, underflow to 0 and denormals alike: no value drape reads is
-     * meant to be 1e400 or 1e-310 (units.c, to_double) */
-    if (range || !isfinite(v) || (v != 0.0 && fabs(v) < DBL_MIN))
+    /* overflow, underflow to 0 and denormals alike (drape_units_strtod) */
+    if (range)
         return drape_yread_error(r, n, path, DRAPE_E_INPUT,
                                  "number out of range: \"%s\"", s);
     if (!sign_ok(v, sign))

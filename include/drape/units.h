@@ -43,6 +43,15 @@ extern const drape_dim DRAPE_DIM_DAMPING;        /* N.s/m */
 int drape_units_parse(const char *text, drape_dim dim, double *si, char *why,
                       size_t nwhy);
 
+/* strtod(s, end) that also says whether the literal lies outside the
+ * normal doubles: *range = 1 when it overflows to inf, underflows to 0 or
+ * lands among the denormals below DBL_MIN (no quantity drape reads is
+ * meant to be 1e400, 1e-400 or 1e-310; taking 1e-400 as 0 would pass
+ * checks such as "non-negative").  An exact zero ("0", "0e-400") is 0
+ * and in range.  One check for every number reader (units, yread, scene,
+ * run options, the KES import). */
+double drape_units_strtod(const char *s, char **end, int *range);
+
 /* Parse a unit expression alone (no number), e.g. "gf.cm/cm", and return its
  * SI scale factor and dimension.  Returns 0 on success, -1 with a reason. */
 int drape_units_parse_unit(const char *unit, double *scale, drape_dim *dim,
