@@ -92,13 +92,15 @@ static void restart_window(auto_state *a)
     a->spell_steps = 0;
 }
 
-/* Make solver k the active one, restarted at (a->t, a->y). */
+/* Make solver k the active one, restarted at (a->t, a->y).  The active
+ * solver's counters move to a->acc only once the restart succeeded: a
+ * failed one leaves it active, and auto_stats counts it once. */
 static int switch_to(auto_state *a, int k, drape_error *err)
 {
     drape_integrator_stats s;
+    if (a->type[k]->reinit(a->st[k], a->t, a->y, err) != 0) return -1;
     a->type[a->cur]->stats(a->st[a->cur], &s);
     add_stats(&a->acc, &s);
-    if (a->type[k]->reinit(a->st[k], a->t, a->y, err) != 0) return -1;
     a->cur = k;
     a->switches++;
     restart_window(a);

@@ -12,10 +12,14 @@
  *     balance (|f_i| small against the particle's weight m_i g);
  *   - memory refusal: 2 * dim^2 * 8 bytes computed by hand.
  */
+#define _GNU_SOURCE /* dlsym(RTLD_NEXT): the restart failure of test_auto_failed_switch */
+#include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <arkode/arkode_erkstep.h>
 
 #include "drape/alloc.h"
 #include "drape/fabric.h"
@@ -306,6 +310,74 @@ START_TEST(test_auto_forced_switches)
     drape_integrator_free(I);
     free(x);
     free(xr);
+    tf_free(&t);
+}
+END_TEST
+
+/* auto, 3: a switch whose restart fails.  ERKStepReInit is interposed
+ * here (the test binary's definition wins over libsundials_arkode's; it
+ * calls the library's unless erk_reinit_fails is set), the only way to
+ * make a SUNDIALS restart fail.  Independent count: the calls of
+ * DRAPE_STEP_ONE that succeeded, each one accepted step of cvode-bdf.  The
+ * failed switch takes no step, so every counter stays as it was before
+ * it (they were added twice: steps 400 after 200 steps); a later switch
+ * that succeeds adds the arkode-erk step to them. */
+static int erk_reinit_fails;
+
+int ERKStepReInit(void *arkode_mem, ARKRhsFn f, sunrealtype t0, N_Vector y0)
+{
+    typedef int (*reinit_fn)(void *, ARKRhsFn, sunrealtype, N_Vector);
+    if (erk_reinit_fails) return ARK_ILL_INPUT;
+    reinit_fn real = (reinit_fn)dlsym(RTLD_NEXT, "ERKStepReInit");
+    ck_assert_msg(real != NULL, "no ERKStepReInit in the libraries");
+    return real(arkode_mem, f, t0, y0);
+}
+
+START_TEST(test_auto_failed_switch)
+{
+    tf_scene t;
+    ts_build(&t, 2.0, 0.02);
+    drape_error err;
+    drape_error_clear(&err);
+    drape_integrator_opts io;
+    drape_integrator_opts_default(&io);
+    io.rtol = 1e-5;
+    io.atol = 1e-8;
+    io.t_stop = 0.3;
+    io.auto_hw = 100.0; /* the first judged window hands over */
+    drape_integrator *I = drape_integrator_new(t.m, "auto", &io, &err);
+    ck_assert_msg(I != NULL, "%s", err.msg);
+    drape_integrator_stats before, st;
+    memset(&before, 0, sizeof before);
+    long ok = 0;
+    erk_reinit_fails = 1;
+    while (ok < 10000 && drape_integrator_step_to(I, 0.3, DRAPE_STEP_ONE, &err) == 0) {
+        ok++;
+        drape_integrator_get_stats(I, &before);
+    }
+    erk_reinit_fails = 0;
+    ck_assert_msg(ok < 10000, "no switch was tried in %ld steps", ok);
+    ck_assert_int_eq(err.kind, DRAPE_E_NUMERIC);
+    ck_assert_msg(strstr(err.msg, "arkode-erk") && strstr(err.msg, "restart"), "%s", err.msg);
+    drape_integrator_get_stats(I, &st);
+    ck_assert_int_eq(before.steps, ok);
+    ck_assert_int_eq(st.steps, ok);
+    ck_assert_int_eq(st.switches, 0);
+    ck_assert_int_eq(st.rhs_evals, before.rhs_evals);
+    ck_assert_int_eq(st.jac_evals, before.jac_evals);
+    ck_assert_int_eq(st.lin_setups, before.lin_setups);
+    ck_assert_int_eq(st.nonlin_iters, before.nonlin_iters);
+    ck_assert_int_eq(st.err_test_fails, before.err_test_fails);
+    ck_assert_int_eq(st.conv_fails, before.conv_fails);
+    ck_assert_int_eq(st.lin_factors, before.lin_factors);
+    /* the switch again, now restarting: one arkode-erk step more */
+    drape_error_clear(&err);
+    ck_assert_msg(drape_integrator_step_to(I, 0.3, DRAPE_STEP_ONE, &err) == 0, "%s", err.msg);
+    drape_integrator_get_stats(I, &st);
+    ck_assert_int_eq(st.switches, 1);
+    ck_assert_int_eq(st.steps, ok + 1);
+    ck_assert_int_eq(st.nonlin_iters, before.nonlin_iters); /* explicit: none */
+    drape_integrator_free(I);
     tf_free(&t);
 }
 END_TEST
@@ -758,6 +830,7 @@ Suite *integrator_suite(void)
     tcase_add_test(tc, test_agreement);
     tcase_add_test(tc, test_auto_switches);
     tcase_add_test(tc, test_auto_forced_switches);
+    tcase_add_test(tc, test_auto_failed_switch);
     tcase_add_test(tc, test_energy_conserved);
     tcase_add_test(tc, test_energy_dissipated);
     suite_add_tcase(s, tc);
