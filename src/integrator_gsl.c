@@ -20,8 +20,14 @@
  * (numerics.md 1.8): equal numbers do not mean equal accuracy.
  *
  * A model evaluation that fails recoverably returns GSL_FAILURE, which makes
- * gsl_odeiv2_evolve_apply halve the step and retry (never GSL_EBADFUNC,
- * which aborts).  GSL's aborting error handler is switched off.
+ * gsl_odeiv2_evolve_apply halve the step and retry.  A Jacobian that cannot
+ * be evaluated returns GSL_EBADFUNC, which ends the step at once (GSL
+ * manual, "Defining the ODE System"): msbdf evaluates it only where the
+ * right-hand side has just succeeded (the predicted state), so it failed on
+ * a stiffness that is not finite, which a shorter step does not cure (with
+ * GSL_FAILURE GSL halved the step until it vanished, 1055 times at t = 0,
+ * and reported a collapsed step size).  GSL's aborting error handler is
+ * switched off.
  *
  * References: GSL manual, "Ordinary Differential Equations"; GSL sources
  * ode-initval2/{msbdf,driver,evolve}.c; Prince & Dormand, J. Comput. Appl.
@@ -53,6 +59,7 @@ typedef struct gsl_state {
     long accepted;  /* accepted steps since the last (re)init: GSL's
                        evolve->count also counts the attempts the error
                        test rejected */
+    int jac_failed; /* the last step_to ended on a failed Jacobian */
 } gsl_state;
 
 static int gsl_rhs(double t, const double y[], double dydt[], void *p)
@@ -71,7 +78,10 @@ static int gsl_jac(double t, const double y[], double *dfdy, double dfdt[], void
     const drape_pattern *pt = s->ode->pattern;
     size_t n = (size_t)s->ode->dim;
     (void)t;
-    if (drape_ode_jacobian(s->ode, s->ode->parts, 1, y, s->Jsp)) return GSL_FAILURE;
+    if (drape_ode_jacobian(s->ode, s->ode->parts, 1, y, s->Jsp)) {
+        s->jac_failed = 1;
+        return GSL_EBADFUNC; /* not recoverable: see the top of the file */
+    }
     memset(dfdy, 0, sizeof(double) * n * n);
     memset(dfdt, 0, sizeof(double) * n);
     for (size_t j = 0; j < n; j++)
@@ -112,6 +122,12 @@ static const char *status_hint(int st)
 
 static int gsl_fail(gsl_state *s, int st, drape_error *err)
 {
+    if (s->jac_failed)
+        return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                               "%s failed at t = %.9g s: the Jacobian could not be evaluated "
+                               "where the forces could (a stiffness entry that is not "
+                               "finite); hint: check the fabric's stiffness values",
+                               s->name, s->t);
     return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                            "%s failed at t = %.9g s: %s (%s); hint: %s", s->name,
                            s->t, status_name(st), gsl_strerror(st), status_hint(st));
@@ -210,6 +226,7 @@ static int gsl_step_to(void *st, double t_out, drape_step_mode mode, double *t,
     double bound = t_out;
     if (s->t_stop > 0.0 && (mode == DRAPE_STEP_ONE || bound > s->t_stop)) bound = s->t_stop;
     gsl_odeiv2_driver *d = s->d;
+    s->jac_failed = 0;
     if (bound > s->t) {
         if (mode == DRAPE_STEP_NORMAL) {
             /* gsl_odeiv2_driver_apply's loop (its hmin 0 and hmax DBL_MAX

@@ -531,6 +531,63 @@ START_TEST(test_folded_start_fails_cleanly)
 }
 END_TEST
 
+/* gsl-msbdf with a Jacobian that cannot be evaluated where the forces can:
+ * the fixture's stretch stiffness times 1e300, so at the flat start (no
+ * strain) the forces are gravity alone but K / m overflows.  A clean error
+ * naming the Jacobian after its first evaluation, no step attempted again
+ * (GSL halved the step 1054 times down to h = 0 and reported a collapsed
+ * step size, counted as 1054 error test failures). */
+START_TEST(test_msbdf_jacobian_fails_cleanly)
+{
+    tf_scene t;
+    ts_build(&t, 0, 0);
+    size_t n3 = 3 * (size_t)t.L->n;
+    drape_fabric stiff = t.fab;
+    stiff.k[DRAPE_WEFT] *= 1e300;
+    stiff.k[DRAPE_WARP] *= 1e300;
+    drape_model_opts mo;
+    drape_model_opts_from_scene(&t.sc, &mo);
+    drape_error err;
+    drape_error_clear(&err);
+    drape_model *m = drape_model_new(t.L, &stiff, &mo, &err);
+    ck_assert_msg(m != NULL, "%s", err.msg);
+    /* the premise: finite forces at the start */
+    double *f = malloc(sizeof(double) * n3), *v0 = calloc(n3, sizeof(double));
+    ck_assert(f && v0);
+    ck_assert_int_eq(drape_model_forces(m, drape_model_parts(m), t.L->xinit, v0, f), 0);
+    ck_assert(all_finite(f, n3));
+    drape_integrator_opts io;
+    drape_integrator_opts_default(&io);
+    drape_integrator *I = drape_integrator_new(m, "gsl-msbdf", &io, &err);
+    ck_assert_msg(I != NULL, "%s", err.msg);
+    ck_assert_int_eq(drape_integrator_step_to(I, 0.01, DRAPE_STEP_NORMAL, &err), -1);
+    ck_assert_int_eq(err.kind, DRAPE_E_NUMERIC);
+    ck_assert_msg(strstr(err.msg, "gsl-msbdf") && strstr(err.msg, "Jacobian") &&
+                      strstr(err.msg, "t = 0 s") && strstr(err.msg, "hint:"),
+                  "%s", err.msg);
+    ck_assert_double_eq(drape_integrator_time(I), 0.0);
+    drape_integrator_stats st;
+    drape_integrator_get_stats(I, &st);
+    ck_assert_int_eq(st.jac_evals, 1);
+    ck_assert_int_eq(st.steps, 0);
+    ck_assert_int_eq(st.err_test_fails, 0);
+    drape_integrator_free(I);
+    /* the driver: a clean failure, the start state kept */
+    drape_sim_opts o;
+    drape_sim_result r;
+    drape_error_clear(&err);
+    sim_opts(&o, "gsl-msbdf", 1e-4, 0.1);
+    ck_assert_int_eq(drape_sim_run(m, &o, NULL, NULL, &r, &err), -1);
+    assert_clean_failure(&r, &err, "gsl-msbdf", "Jacobian", n3);
+    ck_assert_double_eq(r.t_end_s, 0.0);
+    drape_sim_result_free(&r);
+    free(f);
+    free(v0);
+    drape_model_free(m);
+    tf_free(&t);
+}
+END_TEST
+
 /* ---- driver ------------------------------------------------------------------------- */
 
 typedef struct sched_obs {
@@ -838,6 +895,7 @@ Suite *integrator_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_too_much_work);
     tcase_add_test(tc, test_folded_start_fails_cleanly);
+    tcase_add_test(tc, test_msbdf_jacobian_fails_cleanly);
     suite_add_tcase(s, tc);
     tc = tcase_create("equilibrium");
     tcase_set_timeout(tc, 120);
