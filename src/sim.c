@@ -216,7 +216,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     double *x = NULL, *v = NULL, *xc = NULL; /* xc: positions at the last check */
     int rc = -1;
     double wall = 0.0, w0;
-    drape_integrator_stats st;
+    drape_integrator_stats st, st_point; /* st_point: at the last output point */
     const int resume = o->x0 != NULL || o->v0 != NULL || o->t0 > 0.0;
 
     memset(r, 0, sizeof *r);
@@ -271,6 +271,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
     unsigned last_what = 0;
 
     drape_integrator_state(I, x, v);
+    drape_integrator_get_stats(I, &st_point);
     if (resume) {
         /* the start state was checked and observed by the interrupted run */
         below_since = eq ? o->eq_below_since : -1.0;
@@ -331,6 +332,7 @@ int drape_sim_run(drape_model *m, const drape_sim_opts *o,
          * r->x, r->v keep the last good one */
         if (diagnose_point(m, o, I, t_next, x, v, r, err)) goto out;
         t = t_next;
+        drape_integrator_get_stats(I, &st_point);
         memcpy(r->x, x, sizeof(double) * n3);
         memcpy(r->v, v, sizeof(double) * n3);
         speed = drape_sim_max_speed(L, v);
@@ -380,9 +382,11 @@ out:
         r->t_end_s = I ? drape_integrator_time(I) : o->t0;
     }
     r->wall_s = wall;
-    if (I) {
-        drape_integrator_get_stats(I, &r->stats);
-    }
+    /* an interrupted run ends at its last output point, the state a
+     * resumed run starts from: the work after it was thrown away and is
+     * done again, so it is not counted (docs/outputs.md) */
+    if (I && r->status == DRAPE_SIM_INTERRUPTED) r->stats = st_point;
+    else if (I) drape_integrator_get_stats(I, &r->stats);
     if (r->x && r->v) {
         drape_model_energy(m, r->x, &r->energy);
         r->kinetic_J = drape_sim_kinetic_energy(L, r->v);

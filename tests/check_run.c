@@ -775,6 +775,39 @@ START_TEST(test_animate_resume)
 }
 END_TEST
 
+/* A resumed run counts each step once (docs/outputs.md): the interrupted
+ * run reports the counters up to its last output point, the checkpoint
+ * the resumed run starts from, not the steps after it that the stop threw
+ * away and the resumed run takes again.  Independent count: animate's
+ * fixed step h = 0.05 s / 100 on a grid that no output point leaves (no
+ * equilibrium checks), so exactly t / h steps reach time t.  SIGTERM after
+ * one second lands inside a frame interval (it counted the steps taken in
+ * it twice). */
+START_TEST(test_resume_counts_steps_once)
+{
+    const char *scene = ir_scene();
+    const double h = 0.05 / 100;
+    char dir[600], resume[700];
+    snprintf(dir, sizeof dir, "%s/interrupted-count", tu_scratch_dir());
+    const char *a1[] = {"run", "-q", scene, "--method", "animate", "--substeps", "100",
+                        "--out", dir, NULL};
+    int code = run_and_signal(NULL, SIGTERM, a1);
+    ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
+    double t1 = json_num(out, "t_end_s");
+    ck_assert(t1 > 0.0 && t1 < IR_T_MAX);
+    ck_assert_double_eq_tol(json_num(out, "step_s"), h, 1e-15);
+    ck_assert_msg(json_num(out, "steps") == round(t1 / h), "steps %g to t = %g s, want %g",
+                  json_num(out, "steps"), t1, round(t1 / h));
+    snprintf(resume, sizeof resume, "run --resume '%s'", dir);
+    code = tu_run_drape(resume, out, CAP, err, CAP);
+    ck_assert_msg(code == 0, "exit %d, stderr: %s", code, err);
+    ck_assert_msg(strstr(out, "\"status\": \"t_max\""), "%s", out);
+    ck_assert_msg(json_num(out, "steps") == round(IR_T_MAX / h), "steps %g, want %g",
+                  json_num(out, "steps"), round(IR_T_MAX / h));
+}
+END_TEST
+
 static int count_str(const char *text, const char *part)
 {
     int n = 0;
@@ -959,6 +992,10 @@ Suite *run_suite(void)
     tcase_add_test(tc, test_animate_resume);
     tcase_add_test(tc, test_strain_limit_stops_run);
     tcase_add_test(tc, test_bad_corpus_run);
+    suite_add_tcase(s, tc);
+    tc = tcase_create("counts");
+    tcase_set_timeout(tc, 120);
+    tcase_add_test(tc, test_resume_counts_steps_once);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -117,7 +117,9 @@ typedef struct drape_sim_result {
     drape_sim_status status;
     char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* backend name ("auto" for auto) */
     double t_end_s;      /* end of the run (failure: time the solver reached) */
-    drape_integrator_stats stats;
+    drape_integrator_stats stats; /* at t_end_s: interrupted, those at the last
+                           output point (the steps after it are thrown away and
+                           a resumed run takes them again) */
     double wall_s;       /* integrator set-up and stepping, observers excluded */
     drape_energies energy; /* potential energy by term at the final state, J */
     double kinetic_J;
