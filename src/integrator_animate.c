@@ -33,13 +33,15 @@
  * The step h is fixed (opts.fixed_step).  Only a step whose evaluation
  * reports a folded hinge or a non-finite value, or whose S cannot be
  * factored, is redone as two half steps (at most DRAPE_ANIMATE_MAX_HALVINGS
- * times; conv_fails counts them), and a last step is shortened to land on
- * t_stop.  Steps run on the grid t0 + k h (the frames, h divides their
- * interval); an output point off the grid (an equilibrium check) splits
- * its grid step in two, so that every state reported is a state of the
- * one trajectory (no interpolation: the energy balance holds at every
- * output point) and the grid is kept.  Nothing is allocated after alloc
- * except CHOLMOD's first factorisation (linsol_schur.h).
+ * times; conv_fails counts them; each retry starts from the state, energy
+ * and extrapolation the step started with), and a last step is shortened
+ * to land on t_stop.  Steps run on the grid t0 + k h (the frames, h
+ * divides their interval); an output point off the grid (an equilibrium
+ * check) splits its grid step in two, so that every state reported is a
+ * state of the one trajectory (no interpolation: the energy balance
+ * holds at every output point) and the grid is kept.  Nothing is
+ * allocated after alloc except CHOLMOD's first factorisation
+ * (linsol_schur.h).
  */
 #include <math.h>
 #include <string.h>
@@ -90,6 +92,10 @@ typedef struct anim {
     long rescales;        /* steps whose velocities were scaled down */
     double *vlast;        /* nf3: v at the start of the last step */
     double h_last;        /* its size; 0 = none (restart) */
+    double *vlast_prev;   /* nf3: vlast, h_last, e_tot and e_valid before */
+    double h_last_prev;   /* the step being attempted (attempt_save) */
+    double e_tot_prev;
+    int e_valid_prev;
     double mu_last;       /* the shift of the last factorisation */
     long *dpos;           /* nf3: the diagonal's slots in the pattern */
     double e_tot;         /* total energy (kinetic + potential) at y, J */
@@ -112,6 +118,7 @@ static void anim_free(void *st)
     drape_free(s->Kd);
     drape_free(s->dpos);
     drape_free(s->vlast);
+    drape_free(s->vlast_prev);
     drape_free(s->z);
     drape_free(s->w);
     drape_free(s->vn);
@@ -156,8 +163,9 @@ static void *anim_alloc(drape_ode *ode, const drape_integrator_opts *o, double t
     s->dv = drape_malloc(sizeof(double) * n3);
     s->dpos = drape_malloc(sizeof(long) * n3);
     s->vlast = drape_malloc(sizeof(double) * n3);
+    s->vlast_prev = drape_malloc(sizeof(double) * n3);
     if (!s->y || !s->y_prev || !s->r || !s->K || !s->D || !s->Kc || !s->Kd || !s->z || !s->w ||
-        !s->vn || !s->vt || !s->g || !s->dv || !s->dpos || !s->vlast)
+        !s->vn || !s->vt || !s->g || !s->dv || !s->dpos || !s->vlast || !s->vlast_prev)
         goto nomem;
     drape_model_diagonal_slots(ode->model, s->dpos);
     s->have_d = (ode->parts & DRAPE_PARTS_DAMPING) != 0;
@@ -498,21 +506,41 @@ static int be_step(anim *s, double h, double *y, drape_error *err)
     return 0;
 }
 
-/* One step of h from s->y, as 2^k sub-steps if needed. */
-static int anim_step(anim *s, double h, drape_error *err)
+/* What a step attempt changes, kept before it and restored after it
+ * failed: the state, its energy, and the last step's velocity and size
+ * from which the first sub-step extrapolates its Newton guess (so that
+ * the retry starts as a fresh attempt from the same state would, not
+ * from a discarded sub-step). */
+static void attempt_save(anim *s)
 {
     memcpy(s->y_prev, s->y, sizeof(double) * (size_t)s->dim);
-    double e0 = s->e_tot;
-    int e0_valid = s->e_valid;
+    memcpy(s->vlast_prev, s->vlast, sizeof(double) * (size_t)s->nf3);
+    s->h_last_prev = s->h_last;
+    s->e_tot_prev = s->e_tot;
+    s->e_valid_prev = s->e_valid;
+}
+
+static void attempt_restore(anim *s)
+{
+    memcpy(s->y, s->y_prev, sizeof(double) * (size_t)s->dim);
+    memcpy(s->vlast, s->vlast_prev, sizeof(double) * (size_t)s->nf3);
+    s->h_last = s->h_last_prev;
+    s->e_tot = s->e_tot_prev;
+    s->e_valid = s->e_valid_prev;
+}
+
+/* One step of h from s->y, as 2^k sub-steps if needed; a failed attempt
+ * is rolled back whole (attempt_restore) before the next. */
+static int anim_step(anim *s, double h, drape_error *err)
+{
+    attempt_save(s);
     for (int k = 0; k <= DRAPE_ANIMATE_MAX_HALVINGS; k++) {
-        s->e_tot = e0;
-        s->e_valid = e0_valid;
         long nsub = 1L << k;
         double hs = h / (double)nsub;
         int rc = 0;
         for (long j = 0; j < nsub && rc == 0; j++) rc = be_step(s, hs, s->y, err);
         if (rc < 0) {
-            memcpy(s->y, s->y_prev, sizeof(double) * (size_t)s->dim);
+            attempt_restore(s);
             return -1;
         }
         if (rc == 0) {
@@ -521,7 +549,7 @@ static int anim_step(anim *s, double h, drape_error *err)
             return 0;
         }
         s->halvings++;
-        memcpy(s->y, s->y_prev, sizeof(double) * (size_t)s->dim);
+        attempt_restore(s);
     }
     return drape_error_set(err, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
                            "animate: the step at t = %.6g s failed even as %ld steps of "

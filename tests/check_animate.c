@@ -8,12 +8,18 @@
  *   - the rest state of the cantilever (a unique minimum) is the static
  *     solver's certified minimum;
  *   - no allocation per step (drape's allocator counter), the step grid
- *     kept through off-grid output points, the command line's keys. */
+ *     kept through off-grid output points, the command line's keys;
+ *   - a step retried after a failed attempt is the step a fresh attempt
+ *     from the same state computes (cholmod_l_solve2 interposed). */
+#define _GNU_SOURCE /* dlsym(RTLD_NEXT): the failed solves of test_retry_rolls_back */
+#include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+#include <cholmod.h>
 
 #include "drape/alloc.h"
 #include "drape/drape.h"
@@ -250,6 +256,125 @@ START_TEST(test_steps_and_grid)
 }
 END_TEST
 
+/* ---- a failed attempt rolled back ------------------------------------------------ */
+
+/* cholmod_l_solve2 interposed (the test binary's definition wins over
+ * libcholmod's; it calls the library's unless told to fail): it counts
+ * its calls from solve_calls = 0 and fails the ones numbered in
+ * solve_fail (1-based; 0 = none).  A failed solve is one of the step
+ * failures animate redoes as two half steps. */
+static long solve_calls, solve_fail[2];
+
+int cholmod_l_solve2(int sys, cholmod_factor *L, cholmod_dense *B, cholmod_sparse *Bset,
+                     cholmod_dense **X, cholmod_sparse **Xset, cholmod_dense **Y,
+                     cholmod_dense **E, cholmod_common *c)
+{
+    typedef int (*solve_fn)(int, cholmod_factor *, cholmod_dense *, cholmod_sparse *,
+                            cholmod_dense **, cholmod_sparse **, cholmod_dense **,
+                            cholmod_dense **, cholmod_common *);
+    static solve_fn real;
+    solve_calls++;
+    if (solve_calls == solve_fail[0] || solve_calls == solve_fail[1]) return 0;
+    if (!real) real = (solve_fn)dlsym(RTLD_NEXT, "cholmod_l_solve2");
+    ck_assert_msg(real != NULL, "no cholmod_l_solve2 in the libraries");
+    return real(sys, L, B, Bset, X, Xset, Y, E, c);
+}
+
+/* animate at step h on the fixture's hang (air drag), stepped to k h */
+static drape_integrator *anim_at(tf_scene *t, double h, int k)
+{
+    drape_integrator_opts o;
+    drape_integrator_opts_default(&o);
+    o.fixed_step = h;
+    drape_error err;
+    drape_error_clear(&err);
+    drape_integrator *I = drape_integrator_new(t->m, "animate", &o, &err);
+    ck_assert_msg(I != NULL, "%s", err.msg);
+    ck_assert_msg(drape_integrator_step_to(I, k * h, DRAPE_STEP_NORMAL, &err) == 0, "%s", err.msg);
+    return I;
+}
+
+/* Step k + 1 of I with the solves numbered f1 and f2 from its start
+ * failing; the solves of the step after f2 into *after.  No factorisation
+ * may be refused (then the Levenberg-Marquardt shift, which is kept from
+ * step to step, plays no part). */
+static void step_failing(drape_integrator *I, double h, int k, long f1, long f2, long *after)
+{
+    drape_error err;
+    drape_error_clear(&err);
+    solve_calls = 0;
+    solve_fail[0] = f1;
+    solve_fail[1] = f2;
+    ck_assert_msg(drape_integrator_step_to(I, (k + 1) * h, DRAPE_STEP_NORMAL, &err) == 0, "%s",
+                  err.msg);
+    solve_fail[0] = solve_fail[1] = 0;
+    ck_assert_msg(solve_calls > f2, "%ld solves, the %ld-th was to fail", solve_calls, f2);
+    *after = solve_calls - f2;
+    drape_integrator_stats st;
+    drape_integrator_get_stats(I, &st);
+    ck_assert_int_eq(st.conv_fails, 2); /* as 1, 2 failed; as 4 steps it succeeded */
+    ck_assert_int_eq(st.lin_setups, st.lin_factors);
+}
+
+/* A step whose attempt fails after some of its half steps succeeded is
+ * rolled back whole: the retry (four quarter steps) starts its Newton
+ * iterations from the velocity extrapolated from the last step taken,
+ * not from the discarded half step.  Schedule: step k + 1 = 4 of h =
+ * 10 ms (the cloth is falling, its velocity changing) fails as one step
+ * (its first solve fails), then as two half steps, the first of which
+ * succeeds (its N solves, counted by an off-grid output point at
+ * (k + 1/2) h, a half step from the same state) and the second fails at
+ * its first solve.  Independent expectation: the same step where the half
+ * steps fail at once (solves 1 and 2), so that nothing but the state was
+ * there to roll back: the same state after the step, bit for bit, and the
+ * same number of solves in the retry (before: the retry extrapolated from
+ * the half step, a zero acceleration, and differed). */
+START_TEST(test_retry_rolls_back)
+{
+    tf_scene t;
+    tf_build(&t, 0.5, 0.0);
+    const double h = 0.01;
+    const int k = 3;
+    drape_error err;
+    drape_error_clear(&err);
+    /* N: the solves of the half step from the state at k h */
+    drape_integrator *C = anim_at(&t, h, k);
+    solve_calls = 0;
+    ck_assert_int_eq(drape_integrator_step_to(C, (k + 0.5) * h, DRAPE_STEP_NORMAL, &err), 0);
+    long N = solve_calls;
+    ck_assert(N >= 1);
+    drape_integrator_stats st;
+    drape_integrator_get_stats(C, &st);
+    ck_assert_int_eq(st.lin_setups, st.lin_factors);
+    drape_integrator_free(C);
+
+    long n_late, n_fresh;
+    drape_integrator *I = anim_at(&t, h, k), *R = anim_at(&t, h, k);
+    step_failing(I, h, k, 1, N + 2, &n_late);
+    step_failing(R, h, k, 1, 2, &n_fresh);
+    ck_assert_double_eq_tol(drape_integrator_time(I), (k + 1) * h, 1e-15);
+    size_t n3 = 3 * (size_t)t.L->n;
+    double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
+    double *xr = malloc(sizeof(double) * n3), *vr = malloc(sizeof(double) * n3);
+    ck_assert(x && v && xr && vr);
+    drape_integrator_state(I, x, v);
+    drape_integrator_state(R, xr, vr);
+    double dx = max_diff(x, xr, (int)n3), dv = max_diff(v, vr, (int)n3), vmax = 0.0;
+    for (size_t i = 0; i < n3; i++) vmax = fmax(vmax, fabs(vr[i]));
+    ck_assert(vmax > 0.05); /* falling: 9.8 m/s^2 over 40 ms */
+    ck_assert_msg(dx == 0.0 && dv == 0.0, "retry after a half step: |dx| %.17g m, |dv| %.17g m/s "
+                  "from the fresh retry's", dx, dv);
+    ck_assert_int_eq(n_late, n_fresh);
+    free(x);
+    free(v);
+    free(xr);
+    free(vr);
+    drape_integrator_free(I);
+    drape_integrator_free(R);
+    tf_free(&t);
+}
+END_TEST
+
 /* ---- the command line -------------------------------------------------------- */
 
 #define CAP 65536
@@ -321,6 +446,7 @@ Suite *animate_suite(void)
     tcase_add_test(tc, test_first_order);
     tcase_add_test(tc, test_cantilever_rest);
     tcase_add_test(tc, test_steps_and_grid);
+    tcase_add_test(tc, test_retry_rolls_back);
     tcase_add_test(tc, test_cli);
     suite_add_tcase(s, tc);
     return s;
