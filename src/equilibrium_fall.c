@@ -71,7 +71,7 @@ static double kinetic_energy(const eq_work *w, const double *v)
 static double total_energy(eq_work *w, const double *x, const double *v)
 {
     drape_energies E;
-    w->r->force_evals++;
+    w->r->energy_evals++;
     if (drape_model_energy(w->m, x, &E) != 0) return INFINITY;
     return kinetic_energy(w, v) + E.stretch + E.bend + E.shear + E.gravity;
 }

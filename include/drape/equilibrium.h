@@ -192,7 +192,12 @@ typedef struct drape_equilibrium_result {
     int newton_steps;     /* accepted Newton steps */
     int rejected;         /* iterations whose step was refused */
     int factorizations;   /* numeric factorisations, all stages */
-    int energy_evals, force_evals, jacobian_evals;
+    int energy_evals, force_evals, jacobian_evals; /* evaluations of the
+                             model, all stages (the fall's included): of
+                             E_pot alone (the line search, the fall's energy
+                             balance), of the forces, of the Jacobian (the
+                             fall's step evaluates forces and Jacobian in
+                             one pass: counted in both) */
     drape_energies energy; /* E_pot by term at x, J */
     double energy_J;       /* their sum */
     double max_force_rel;  /* max_i |F_i| / w_i at x */
