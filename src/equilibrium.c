@@ -579,6 +579,18 @@ static void trace(const drape_equilibrium_opts *o, int iter, int newton, double 
     o->trace(o->trace_ctx, &it);
 }
 
+/* After a refused iteration (E1, E3): PTC halves dt; a refused Newton
+ * step goes back to PTC at dt_newton / 4. */
+static void refuse(int *newton, double *dt, double dt_newton)
+{
+    if (*newton) {
+        *newton = 0;
+        *dt = dt_newton / 4.0;
+    } else {
+        *dt *= 0.5;
+    }
+}
+
 /* ------------------------------------------------------------------ solve */
 
 int drape_equilibrium_solve(drape_model *m, const double *x0,
@@ -790,10 +802,11 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         }
         if (pd < 0) goto out;
         if (pd == 0) {
+            int was_newton = newton;
             r->rejected++;
-            trace(&o, r->iterations, newton, newton ? INFINITY : dt, 0, 0, 0.0, E, frel, 0.0);
-            if (newton) { newton = 0; dt = dt_newton / 4.0; }
-            else dt *= 0.5;
+            refuse(&newton, &dt, dt_newton);
+            trace(&o, r->iterations, was_newton, was_newton ? INFINITY : dt, 0, 0, 0.0, E,
+                  frel, 0.0);
             continue;
         }
         if (eq_solve(&w, rhs, w.dy, err) != 0) goto out;
@@ -839,22 +852,22 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
             frel = force_rel(&w, w.f);
             have_jac = 0;
         }
-        trace(&o, r->iterations, newton, newton ? INFINITY : dt, 1, accepted, alpha,
-              E, frel, step);
+        int was_newton = newton;
         if (accepted) {
             if (newton) r->newton_steps++;
             else r->ptc_steps++;
             if (!newton && dt >= dt_newton) newton = 1;
         } else {
             r->rejected++;
-            if (newton) { newton = 0; dt = dt_newton / 4.0; }
-            else dt *= 0.5;
-            /* a full Newton step whose energy change is within rounding and
-             * that does not lower the residual: the roundoff floor (E5) */
-            if (noise) {
-                r->status = DRAPE_EQ_STALLED;
-                break;
-            }
+            refuse(&newton, &dt, dt_newton);
+        }
+        trace(&o, r->iterations, was_newton, was_newton ? INFINITY : dt, 1, accepted, alpha,
+              E, frel, step);
+        /* a full Newton step whose energy change is within rounding and
+         * that does not lower the residual: the roundoff floor (E5) */
+        if (!accepted && noise) {
+            r->status = DRAPE_EQ_STALLED;
+            break;
         }
     }
 

@@ -950,6 +950,85 @@ START_TEST(test_eval_counts)
 }
 END_TEST
 
+/* The iterations of one solve, as traced (opts.trace). */
+typedef struct trace_log {
+    int n;
+    drape_equilibrium_iter it[64];
+} trace_log;
+
+static void trace_keep(void *ctx, const drape_equilibrium_iter *it)
+{
+    trace_log *t = ctx;
+    if (t->n < 64) t->it[t->n] = *it;
+    t->n++;
+}
+
+/* The trace's dt_s is the pseudo time step after the iteration, the one
+ * the next iteration uses (equilibrium.h).  Followed through the PTC
+ * iterations from dt0 with the rules of equilibrium.c (E1-E3): a refused
+ * iteration halves the step it tried, exactly (a power of two); an
+ * accepted one scales it by sqrt(alpha) after a shortened step (alpha =
+ * 1/2 or 1/4 in PTC), else by the SER growth, within [dt_growth_min,
+ * dt_growth_max] = [1.5, 4].  Refusals of both kinds, the chain from dt0
+ * = 10 s (about 200 time scales, a Newton step from the flat start): _i =
+ * 0 released horizontally, exact Hessian, the first seven steps too long
+ * for the line search (posdef 1, refused); _i = 1 standing upright, exact
+ * Hessian (its compressed springs' negative stiffness): iteration
+ * matrices that are not positive definite (posdef 0).  Before this was
+ * fixed a refused iteration recorded the step it had tried (the first
+ * one 10 s instead of 5 s). */
+START_TEST(test_trace_dt)
+{
+    const double dir[2][3] = {{1.0, 0.0, 0.0}, {0.0, 0.0, 1.0}};
+    drape_lattice *L = chain_new(dir[_i]);
+    drape_model *m = chain_model(L);
+    drape_equilibrium_opts o;
+    drape_equilibrium_opts_default(&o);
+    o.dt0 = 10.0;
+    o.max_iters = 40;
+    o.certify = 0;
+    trace_log t = {0};
+    o.trace = trace_keep;
+    o.trace_ctx = &t;
+    drape_equilibrium_result r;
+    drape_error err;
+    drape_error_clear(&err);
+    ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r, &err) == 0, "%s", err.msg);
+    ck_assert_int_eq(t.n, r.iterations);
+    ck_assert_int_le(t.n, 64);
+    int refused[2] = {0, 0}; /* by posdef */
+    double tried = o.dt0;
+    for (int k = 0; k < t.n && !t.it[k].newton; k++) {
+        const drape_equilibrium_iter *it = &t.it[k];
+        double q = it->dt_s / tried;
+        if (!it->accepted) {
+            refused[it->posdef]++;
+            ck_assert_msg(q == 0.5, "iteration %d refused: dt %g s after %g s", it->iter,
+                          it->dt_s, tried);
+        } else if (it->alpha < 1.0) {
+            ck_assert_msg(fabs(q - sqrt(it->alpha)) <= 1e-15,
+                          "iteration %d: alpha %g, dt %g s after %g s", it->iter, it->alpha,
+                          it->dt_s, tried);
+        } else {
+            ck_assert_msg(q >= 1.5 * (1 - 1e-15) && q <= 4.0 * (1 + 1e-15),
+                          "iteration %d: dt %g s after %g s", it->iter, it->dt_s, tried);
+        }
+        tried = it->dt_s;
+    }
+    if (_i == 0) {
+        ck_assert_int_eq(r.status, DRAPE_EQ_CONVERGED);
+        ck_assert_msg(refused[1] >= 1 && t.it[0].dt_s == 5.0, "%d refused, first dt %g s",
+                      refused[1], t.it[0].dt_s);
+    } else {
+        ck_assert_int_ge(refused[0], 1);
+    }
+    ck_assert_int_eq(refused[0] + refused[1], r.rejected);
+    drape_equilibrium_result_free(&r);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* A fall of very many steps (dyn_time / dyn_dt beyond the range of an int:
  * `drape run --fall-time 1e6s --fall-step 0.1ms`) is a valid request; with
  * the stop raised before the call it ends at once as interrupted.  The
@@ -1041,6 +1120,7 @@ Suite *equilibrium_suite(void)
     tcase_add_test(tc, test_fall_fold_guard_without_swing);
     tcase_add_test(tc, test_fall_many_steps);
     tcase_add_test(tc, test_eval_counts);
+    tcase_add_loop_test(tc, test_trace_dt, 0, 2);
     tcase_add_test(tc, test_fall_tol);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);

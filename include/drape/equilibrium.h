@@ -38,7 +38,11 @@
 typedef struct drape_equilibrium_iter {
     int iter;             /* iterations so far (accepted + refused) */
     int newton;           /* 1: a Newton (unshifted) step, 0: a PTC step */
-    double dt_s;          /* pseudo time step after the iteration (inf: Newton) */
+    double dt_s;          /* pseudo time step after the iteration, the one
+                             the next PTC iteration uses (a refused one's
+                             half the step it tried); inf for a Newton
+                             iteration (refused: the next, PTC, starts at
+                             dt_newton / 4) */
     int posdef;           /* 1 if the iteration matrix factorised */
     int accepted;         /* 1 if the step was taken */
     double alpha;         /* line-search fraction of the step */
