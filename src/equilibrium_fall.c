@@ -93,6 +93,7 @@ static void fall_record(const eq_work *w, eq_fall_state *s, const double *x,
     s->ke_peak = ke_peak;
     s->ke_win = ke_win;
     s->steps = r->dyn_steps;
+    s->refused = r->dyn_refused;
 }
 
 /* (E9) Damped implicit dynamics: M x'' = f(x, v) (all of the model's
@@ -195,6 +196,7 @@ int eq_fall(eq_work *w, double *x, const drape_equilibrium_opts *o, double T_max
     double e_prev = total_energy(w, x, v);
     if (from) { /* the record of the fall up to from->t goes on */
         r->dyn_steps = from->steps;
+        r->dyn_refused = from->refused; /* not those of the fall thrown away */
         r->dyn_dt_min = from->dt_min;
         r->dyn_dt_max = from->dt_max;
         r->dyn_e_start = from->e_start;

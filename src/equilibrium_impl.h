@@ -64,6 +64,7 @@ typedef struct eq_fall_state {
     double ke_win;      /* J: the largest over the swing criterion's window
                            that ends at t */
     int steps;          /* steps up to t */
+    int refused;        /* steps refused up to t (dyn_refused) */
 } eq_fall_state;
 
 /* (E9) The fall: damped implicit dynamics of x (3n, updated in place)

@@ -1029,6 +1029,54 @@ START_TEST(test_trace_dt)
 }
 END_TEST
 
+/* dyn_refused (fall_refused) counts the refusals of the fall as taken:
+ * after a redo (dyn_redo_tol), those of the fixed-step fall up to
+ * dyn_redo_from and those of the error-controlled fall from there, not
+ * those of the fixed-step fall's part thrown away (like dyn_steps).  The
+ * chain standing almost upright (tilted by 1 in 20) falls over; with its
+ * compressed springs clamped, the long step of 0.15 s after a fold phase
+ * of 0.1 s at 75 ms is refused at 0.25 s, and the fall at the fold step
+ * gains energy until it is stopped at 0.4 s and taken up again from
+ * 0.325 s.  A retry of the long step (dyn_retry: 0.075 s after the
+ * refusal, which the error-controlled fall does not use) changes only the
+ * part thrown away: it is refused again at 0.325 s.  So both falls are
+ * taken the same way (the same steps, the same state) and must report the
+ * same refusals, at least the one at 0.25 s.  Before this was fixed the
+ * retry's refusal was counted too: 2 against 1. */
+START_TEST(test_fall_redo_refused)
+{
+    const double dir[3] = {0.05, 0.0, sqrt(1.0 - 0.05 * 0.05)};
+    drape_lattice *L = chain_new(dir);
+    drape_model *m = chain_model(L);
+    drape_equilibrium_result r[2];
+    for (int c = 0; c < 2; c++) { /* no retry; retry */
+        drape_equilibrium_opts o;
+        drape_equilibrium_opts_default(&o);
+        o.clamp_k[0] = o.clamp_k[1] = CHAIN_K;
+        o.dyn_time = 0.4;
+        o.dyn_dt = 0.15;
+        o.dyn_time_fold = 0.1;
+        o.dyn_dt_fold = 0.075;
+        o.dyn_retry = c == 1 ? 0.075 : 0.0;
+        o.dyn_redo_tol = 30e-6;
+        o.dyn_only = 1;
+        drape_error err;
+        drape_error_clear(&err);
+        ck_assert_msg(drape_equilibrium_solve(m, L->xinit, &o, &r[c], &err) == 0, "%s", err.msg);
+        ck_assert_int_eq(r[c].status, DRAPE_EQ_DYN_ONLY);
+        ck_assert_int_eq(r[c].dyn_redone, 1);
+        ck_assert_double_eq_tol(r[c].dyn_redo_from, 0.325, 1e-12);
+    }
+    ck_assert_int_eq(r[1].dyn_steps, r[0].dyn_steps);
+    for (int k = 0; k < 3 * L->n; k++) ck_assert(r[1].x[k] == r[0].x[k]);
+    ck_assert_msg(r[1].dyn_refused == r[0].dyn_refused && r[0].dyn_refused >= 1,
+                  "refused: %d with the retry, %d without", r[1].dyn_refused, r[0].dyn_refused);
+    for (int c = 0; c < 2; c++) drape_equilibrium_result_free(&r[c]);
+    drape_model_free(m);
+    drape_lattice_free(L);
+}
+END_TEST
+
 /* A fall of very many steps (dyn_time / dyn_dt beyond the range of an int:
  * `drape run --fall-time 1e6s --fall-step 0.1ms`) is a valid request; with
  * the stop raised before the call it ends at once as interrupted.  The
@@ -1120,6 +1168,7 @@ Suite *equilibrium_suite(void)
     tcase_add_test(tc, test_fall_fold_guard_without_swing);
     tcase_add_test(tc, test_fall_many_steps);
     tcase_add_test(tc, test_eval_counts);
+    tcase_add_test(tc, test_fall_redo_refused);
     tcase_add_loop_test(tc, test_trace_dt, 0, 2);
     tcase_add_test(tc, test_fall_tol);
     tcase_add_test(tc, test_bad_input);

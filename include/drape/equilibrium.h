@@ -169,7 +169,11 @@ typedef struct drape_equilibrium_result {
                              until dyn_retry), dyn_dt after the fold phase
                              (then dyn_dt_fold),
                              or steps of the error-controlled fall (redone
-                             at half the step) */
+                             at half the step); after a redo (dyn_redone),
+                             those of the fall as taken (as dyn_steps): the
+                             fixed-step fall's up to dyn_redo_from and the
+                             second fall's, not those of the part thrown
+                             away */
     int dyn_pumped;       /* 1: the fixed-step fall was stopped because its
                              total energy rose above its lowest value by more
                              than a tenth of the peak kinetic energy at the
