@@ -212,7 +212,10 @@ typedef struct drape_equilibrium_result {
     double max_strain;     /* largest stretch strain at x */
     int certified;         /* 1 strict local minimum, 0 not one (the exact
                               Hessian is not positive definite: a saddle),
-                              -1 not checked */
+                              -1 not checked.  Where the Hessian has a zero
+                              mode (a free rigid motion: a cloth hung from
+                              one pin) 1 or 0 is the sign of roundoff
+                              (docs/equilibrium.md, "Zero modes") */
     long not_posdef_column;/* certified 0: column (in CHOLMOD's order) where
                               LL^T failed, else -1 */
     double min_pivot;      /* certified 1: smallest pivot L_ii^2 of the exact
