@@ -18,6 +18,7 @@
 #include "cli_bench.h"
 #include "cli_data.h"
 #include "cli_io.h"
+#include "cli_run.h"
 #include "drape/alloc.h"
 #include "drape/drape.h"
 #include "drape/fabric.h"
@@ -72,7 +73,8 @@ static const char bench_usage[] =
     "                          arkode-imex, arkode-dirk, arkode-erk, gsl-msbdf,\n"
     "                          gsl-rk8pd and animate; auto only when listed)\n"
     "  --rtols LIST            comma-separated values, or HI:LO:N = N per decade\n"
-    "                          from HI down to LO (default " BENCH_DEFAULT_RTOLS ")\n"
+    "                          from HI down to LO (default " BENCH_DEFAULT_RTOLS ");\n"
+    "                          each value in (0, 1) as run's --rtol reads it\n"
     "  --steps LIST            the animate method's fixed steps, which it sweeps\n"
     "                          instead of tolerances, e.g. 10ms,5ms (default: the\n"
     "                          sample interval t_end / K divided by 1, 2, 4, ..., 32)\n"
@@ -185,26 +187,31 @@ static int split_list(char *text, char **items, int max)
     return n;
 }
 
-/* --rtols: "a,b,c" or "HI:LO:N".  Values sorted from loose to tight. */
-static int parse_rtols(const char *text, double *out, int max)
+/* --rtols: "a,b,c" or "HI:LO:N", each value read as run's --rtol
+ * (drape_cli_rtol_parse).  Values sorted from loose to tight.  The count,
+ * or -1 with why naming --rtols. */
+static int parse_rtols(const char *text, double *out, int max, char *why, size_t nwhy)
 {
     char buf[512];
     int n = 0;
-    if (strlen(text) >= sizeof buf) return -1;
+    if (strlen(text) >= sizeof buf) return snprintf(why, nwhy, "--rtols: list too long"), -1;
     snprintf(buf, sizeof buf, "%s", text);
-    if (strchr(buf, ':')) {
-        char *end;
-        double hi = strtod(buf, &end);
-        if (*end != ':') return -1;
-        double lo = strtod(end + 1, &end);
-        if (*end != ':') return -1;
-        long per = strtol(end + 1, &end, 10);
-        if (*end || per < 1 || per > 8 || !(hi > 0 && hi < 1) || !(lo > 0 && lo <= hi))
+    char *c1 = strchr(buf, ':');
+    if (c1) {
+        char *c2 = strchr(c1 + 1, ':'), *end;
+        double hi, lo;
+        if (!c2) goto bad_range;
+        *c1 = *c2 = 0;
+        if (drape_cli_rtol_parse("--rtols", buf, &hi, why, nwhy) ||
+            drape_cli_rtol_parse("--rtols", c1 + 1, &lo, why, nwhy))
             return -1;
+        errno = 0;
+        long per = strtol(c2 + 1, &end, 10);
+        if (errno || end == c2 + 1 || *end || per < 1 || per > 8 || !(lo <= hi)) goto bad_range;
         double decades = log10(hi / lo);
         long k_max = (long)floor(decades * (double)per + 1e-9);
         for (long k = 0; k <= k_max; k++) {
-            if (n == max) return -1;
+            if (n == max) return snprintf(why, nwhy, "--rtols: more than %d values", max), -1;
             double e = log10(hi) - (double)k / (double)per;
             double v = pow(10.0, e);
             /* keep three significant digits so names print cleanly */
@@ -215,13 +222,9 @@ static int parse_rtols(const char *text, double *out, int max)
     } else {
         char *items[BENCH_MAX_LIST];
         int k = split_list(buf, items, BENCH_MAX_LIST < max ? BENCH_MAX_LIST : max);
-        if (k < 0) return -1;
-        for (int i = 0; i < k; i++) {
-            char *end;
-            double v = strtod(items[i], &end);
-            if (*end || !(v > 0 && v < 1)) return -1;
-            out[n++] = v;
-        }
+        if (k < 0) goto bad_range;
+        for (int i = 0; i < k; i++)
+            if (drape_cli_rtol_parse("--rtols", items[i], &out[n++], why, nwhy)) return -1;
     }
     /* loose to tight */
     for (int i = 1; i < n; i++)
@@ -231,6 +234,24 @@ static int parse_rtols(const char *text, double *out, int max)
             out[j - 1] = t;
         }
     return n;
+bad_range:
+    snprintf(why, nwhy, "--rtols: expected values in (0, 1) as a,b,c or HI:LO:N "
+             "(LO <= HI, N from 1 to 8 per decade), got `%s'", text);
+    return -1;
+}
+
+/* --ref-rtol: "X" or "X,Y", each read as run's --rtol. */
+static int parse_ref_rtol(const char *text, double ref_rtol[2], char *why, size_t nwhy)
+{
+    char buf[256], *items[3];
+    if (strlen(text) >= sizeof buf) return snprintf(why, nwhy, "--ref-rtol: too long"), -1;
+    snprintf(buf, sizeof buf, "%s", text);
+    int k = split_list(buf, items, 2);
+    if (k < 1) return snprintf(why, nwhy, "--ref-rtol: expected X or X,Y, got `%s'", text), -1;
+    for (int i = 0; i < k; i++)
+        if (drape_cli_rtol_parse("--ref-rtol", items[i], &ref_rtol[i], why, nwhy)) return -1;
+    if (k == 1) ref_rtol[1] = ref_rtol[0];
+    return 0;
 }
 
 static int integrator_known(const char *name)
@@ -560,13 +581,12 @@ int drape_cli_bench(int argc, char **argv)
             break;
         }
         case O_REF: ref_text = optarg; break;
-        case O_REFRTOL:
-            ref_rtol[0] = strtod(optarg, &end);
-            ref_rtol[1] = ref_rtol[0];
-            if (*end == ',') ref_rtol[1] = strtod(end + 1, &end);
-            if (*end || !(ref_rtol[0] > 0 && ref_rtol[0] < 1) || !(ref_rtol[1] > 0 && ref_rtol[1] < 1))
-                return bench_usage_error("--ref-rtol: expected X or X,Y in (0, 1), got %s", optarg);
+        case O_REFRTOL: {
+            char why[512];
+            if (parse_ref_rtol(optarg, ref_rtol, why, sizeof why) != 0)
+                return bench_usage_error("%s", why);
             break;
+        }
         case O_OUT: out_dir = optarg; break;
         case O_NAME:
             if (!*optarg || strchr(optarg, '/'))
@@ -626,9 +646,9 @@ int drape_cli_bench(int argc, char **argv)
         }
     }
     double rtols[BENCH_MAX_LIST];
-    int n_rtols = parse_rtols(rtols_text, rtols, BENCH_MAX_LIST);
-    if (n_rtols < 1)
-        return bench_usage_error("--rtols: expected values in (0, 1) as a,b,c or HI:LO:N, got `%s'", rtols_text);
+    char rtols_why[512];
+    int n_rtols = parse_rtols(rtols_text, rtols, BENCH_MAX_LIST, rtols_why, sizeof rtols_why);
+    if (n_rtols < 1) return bench_usage_error("%s", rtols_why);
     int sizes[BENCH_MAX_LIST], n_sizes = 0;
     {
         if (strlen(sizes_text) >= sizeof sizes_buf) return bench_usage_error("--sizes: list too long%s", "");

@@ -64,6 +64,14 @@ void drape_cli_run_args_init(run_args *ra);
  * ("--rtol: must be in (0, 1), got 2"). */
 int drape_cli_run_option(run_args *ra, const char *name, const char *text, char *why, size_t n);
 
+/* A relative tolerance as `drape run --rtol` reads it: a dimensionless
+ * quantity (drape_units_parse: decimal, exponent or fraction "1/1000"; no
+ * hex, inf or nan; out of the normal doubles refused) in (0, 1).  Shared
+ * by bench's --rtols and --ref-rtol, so that they take what run takes.
+ * 0 and *v, or -1 with why naming the option name ("--rtols: must be in
+ * (0, 1), got 2"). */
+int drape_cli_rtol_parse(const char *name, const char *text, double *v, char *why, size_t n);
+
 /* 1 if texts a and b of option name (as drape_cli_run_option takes them)
  * both parse and set the same value: `--spacing 5mm` and `0.5cm`,
  * `--rtol 1e-4` and `0.0001`, `--terms bend,stretch` and `stretch,bend`.

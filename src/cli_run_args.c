@@ -214,6 +214,16 @@ static int quantity(const char *name, const char *text, drape_dim dim, double *v
     return -1;
 }
 
+int drape_cli_rtol_parse(const char *name, const char *text, double *v, char *why, size_t n)
+{
+    if (quantity(name, text, DRAPE_DIM_NONE, v, why, n)) return -1;
+    if (!(*v > 0 && *v < 1)) {
+        snprintf(why, n, "%s: must be in (0, 1), got %s", name, text);
+        return -1;
+    }
+    return 0;
+}
+
 #define IS(opt) (strcmp(name, opt) == 0)
 #define WHY(...) (snprintf(why, n, __VA_ARGS__), -1)
 
@@ -231,8 +241,7 @@ int drape_cli_run_option(run_args *ra, const char *name, const char *text, char 
         return ra->form = text, 0;
     }
     if (IS("--rtol")) {
-        if (quantity(name, text, DRAPE_DIM_NONE, &v, why, n)) return -1;
-        if (!(v > 0 && v < 1)) return WHY("--rtol: must be in (0, 1), got %s", text);
+        if (drape_cli_rtol_parse(name, text, &v, why, n)) return -1;
         return ra->rtol = v, 0;
     }
     if (IS("--atol") || IS("--spacing")) {

@@ -297,6 +297,63 @@ START_TEST(test_usage)
 }
 END_TEST
 
+/* bench's --rtols and --ref-rtol read each value as run's --rtol does: a
+ * dimensionless quantity (fractions allowed, hex floats and numbers
+ * outside the normal doubles refused) in (0, 1).  A scene that does not
+ * exist tells them apart without running anything: an accepted value
+ * reaches the scene (exit 3), a refused one stops at the option (exit 2,
+ * the message naming it). */
+static int bench_takes(const char *opt, const char *text)
+{
+    char cmd[256];
+    snprintf(cmd, sizeof cmd, "bench %s '%s' no-such-scene.yaml", opt, text);
+    int rc = tu_run_drape(cmd, out, CAP, err, CAP);
+    if (rc == 3) {
+        ck_assert_msg(strstr(err, "no-such-scene.yaml") != NULL, "%s: %s", cmd, err);
+        return 1;
+    }
+    ck_assert_msg(rc == 2, "%s: exit %d, expected 2 or 3", cmd, rc);
+    char named[32];
+    snprintf(named, sizeof named, "drape: %s: ", opt);
+    ck_assert_msg(strstr(err, named) != NULL, "%s: message does not name %s: %s", cmd, opt, err);
+    return 0;
+}
+
+START_TEST(test_rtol_range)
+{
+    static const struct {
+        const char *text;
+        int ok;
+    } one[] = {{"1e-3", 1}, {"0.5", 1}, {"1/1000", 1}, {"3/4", 1}, {"1e-300", 1},
+               {"0", 0}, {"1", 0}, {"2", 0}, {"-1e-3", 0}, {"0x1p-10", 0},
+               {"1e-400", 0}, {"1e-310", 0}, {"inf", 0}, {"nan", 0}, {"1e-3x", 0},
+               {"1/0", 0}};
+    for (size_t i = 0; i < sizeof one / sizeof one[0]; i++) {
+        char cmd[128];
+        snprintf(cmd, sizeof cmd, "run --rtol '%s' no-such-scene.yaml", one[i].text);
+        int run_rc = tu_run_drape(cmd, out, CAP, err, CAP);
+        ck_assert_msg(run_rc == (one[i].ok ? 3 : 2), "%s: exit %d", cmd, run_rc);
+        ck_assert_msg(bench_takes("--rtols", one[i].text) == one[i].ok, "--rtols %s", one[i].text);
+        ck_assert_msg(bench_takes("--ref-rtol", one[i].text) == one[i].ok, "--ref-rtol %s",
+                      one[i].text);
+    }
+    /* the range refused in run's words, naming the option */
+    ck_assert(!bench_takes("--rtols", "1e-3,2"));
+    ck_assert_ptr_nonnull(strstr(err, "--rtols: must be in (0, 1), got 2"));
+    ck_assert(!bench_takes("--ref-rtol", "1e-12,1e-400"));
+    ck_assert_ptr_nonnull(strstr(err, "--ref-rtol: number out of range: \"1e-400\""));
+    /* lists, the HI:LO:N form and the pair of --ref-rtol */
+    ck_assert(bench_takes("--rtols", "1/100,1e-4,1/1000000"));
+    ck_assert(!bench_takes("--rtols", "1e-3,0x1p-12"));
+    ck_assert(bench_takes("--rtols", "1/100:1e-5:1"));
+    ck_assert(!bench_takes("--rtols", "0x1p-4:1e-6:2"));
+    ck_assert(!bench_takes("--rtols", "1e-3:1e-400:2"));
+    ck_assert(!bench_takes("--rtols", "1e-4:1e-2:1")); /* LO > HI */
+    ck_assert(bench_takes("--ref-rtol", "1e-12,1/1000"));
+    ck_assert(!bench_takes("--ref-rtol", "1e-12,1e-11,1e-10"));
+}
+END_TEST
+
 Suite *bench_suite(void)
 {
     Suite *s = suite_create("bench");
@@ -309,6 +366,7 @@ Suite *bench_suite(void)
     tcase_add_test(tc, test_out_dir);
     tcase_add_test(tc, test_kernels);
     tcase_add_test(tc, test_usage);
+    tcase_add_test(tc, test_rtol_range);
     suite_add_tcase(s, tc);
     return s;
 }
