@@ -405,11 +405,14 @@ void drape_cli_warn(void *ctx, const drape_error *w)
 
 /* ---- JSON --------------------------------------------------------------- */
 
+/* Line and column (1-based) of byte off of a NUL-terminated text.  LF,
+ * CR LF and CR alone (old Mac files) each end one line, as libyaml and
+ * drape's YAML messages count them (docs/fabrics.md). */
 static void line_col(const char *text, size_t off, int *line, int *col)
 {
     *line = 1, *col = 1;
     for (size_t i = 0; i < off && text[i]; i++) {
-        if (text[i] == '\n') (*line)++, *col = 1;
+        if (text[i] == '\n' || (text[i] == '\r' && text[i + 1] != '\n')) (*line)++, *col = 1;
         else (*col)++;
     }
 }

@@ -53,8 +53,8 @@ int drape_cli_file_sum(const char *path, size_t max, unsigned long long *sum,
 /* Read a file of at most max bytes that holds one JSON value (blanks and
  * // or / * * / comments around it, as ARCSim's files have): the value
  * (caller frees with json_object_put), or NULL and err: E_SYNTAX at
- * path:line:column for a NUL byte, malformed JSON or text after the value,
- * E_IO or E_NOMEM. */
+ * path:line:column for a NUL byte, malformed JSON or text after the value
+ * (LF, CR LF and CR alone each end a line), E_IO or E_NOMEM. */
 struct json_object *drape_cli_read_json(const char *path, size_t max, drape_error *err);
 
 /* Replace a file atomically: open writes to PATH.tmp.PID next to it;

@@ -292,6 +292,40 @@ START_TEST(test_arcsim_errors)
 }
 END_TEST
 
+/* The lines of an error's file:line:column count LF, CR LF and CR alone
+ * (old Mac files) each as one break: the same file in the three forms
+ * gives the same place, counted by hand (a CR LF file does not count
+ * twice, a CR file does not stay on line 1). */
+START_TEST(test_arcsim_line_endings)
+{
+    static const char *const eol[3] = {"\n", "\r\n", "\r"};
+    static const char *const syntax[] = {"{", "  \"density\": 0.1,", "  \"stretching\": [",
+                                         "    [1, 2, 3, 4],", "    [1, 2, }", NULL};
+    static const char *const after[] = {"{\"density\": 0.1}", "", "  x", NULL};
+    static const struct {
+        const char *const *lines, *expect;
+    } cases[] = {
+        {syntax, "le.json:5:12: not valid JSON"}, /* the '}' in place of a number */
+        {after, "le.json:3:3: text after the end of the JSON object"},
+    };
+    const char *dir = subdir("arcsim-eol");
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++)
+        for (int k = 0; k < 3; k++) {
+            char text[512] = "", args[1024];
+            for (int i = 0; cases[c].lines[i]; i++) {
+                strcat(text, cases[c].lines[i]);
+                strcat(text, eol[k]);
+            }
+            snprintf(args, sizeof args, "import arcsim %s --out-dir %s",
+                     tu_write_file("le.json", text), dir);
+            int rc = tu_run_drape(args, out, CAP, err, CAP);
+            ck_assert_msg(rc == 1 && strstr(err, cases[c].expect),
+                          "case %zu, line ending %d: exit %d, expected `%s` in: %s", c, k, rc,
+                          cases[c].expect, err);
+        }
+}
+END_TEST
+
 /* ---- kes --------------------------------------------------------------------- */
 
 START_TEST(test_kes_table)
@@ -392,6 +426,7 @@ Suite *import_suite(void)
     tcase_add_test(tc, test_arcsim_reproduces_shipped_wang);
     tcase_add_test(tc, test_arcsim_by_hand);
     tcase_add_test(tc, test_arcsim_errors);
+    tcase_add_test(tc, test_arcsim_line_endings);
     tcase_add_test(tc, test_kes_table);
     tcase_add_test(tc, test_kes_errors);
     suite_add_tcase(s, tc);
