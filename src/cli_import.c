@@ -16,7 +16,9 @@
  *   poly = [0, (ke_i - s_i K_i) / 4, s_i / 4]; beyond: [0, ke_4 / 4]  (A4)
  *
  * The JSON is read with json-c (comments are accepted, as by ARCSim's
- * JsonCpp reader).
+ * JsonCpp reader); every number in it must be a normal double or 0
+ * (drape_cli_read_json_in_range: 1e400, 1e-400, 1e-310 refused at
+ * file:line:column with their key).
  *
  * kes: a CSV table of KES-F summary values, one fabric per row, becomes
  * one fabric file per row with a `kes:` block (docs/fabrics.md, "KES-F
@@ -356,7 +358,7 @@ static int arcsim_read(const char *path, arcsim_mat *m, drape_error *e)
 {
     int rc = -1;
     json_object *v;
-    json_object *root = drape_cli_read_json(path, IMPORT_MAX_INPUT, e);
+    json_object *root = drape_cli_read_json_in_range(path, IMPORT_MAX_INPUT, e);
     if (!root) return -1;
     if (!json_object_is_type(root, json_type_object)) {
         drape_error_set(e, DRAPE_E_INPUT, path, 0, 0, NULL,

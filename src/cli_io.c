@@ -18,6 +18,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,6 +33,7 @@
 #include <json-c/json.h>
 
 #include "drape/alloc.h"
+#include "drape/units.h"
 
 /* ---- whole files ----------------------------------------------------------- */
 
@@ -434,7 +436,107 @@ static size_t skip_blank(const char *t, size_t i, size_t n)
     return i;
 }
 
+static struct json_object *read_json(const char *path, size_t max, int in_range,
+                                     drape_error *err);
+
+/* The scan of json_numbers_in_range: one open object or array, with the
+ * key or index of the value in it being read. */
+#define JSON_SCAN_DEPTH 64 /* more than json_tokener_new_ex's 32 */
+typedef struct json_frame {
+    char kind;    /* '{' or '[' */
+    int want_key; /* in an object, the next string is a key */
+    long index;   /* in an array */
+    char key[64];
+} json_frame;
+
+/* The key path of the value being read: "bending[2][2]", "specimens[3].dc". */
+static void json_key_path(const json_frame *f, int depth, char *buf, size_t n)
+{
+    size_t k = 0;
+    buf[0] = 0;
+    for (int d = 0; d < depth && k < n; d++) {
+        int w = f[d].kind == '[' ? snprintf(buf + k, n - k, "[%ld]", f[d].index)
+                                 : snprintf(buf + k, n - k, "%s%s", k ? "." : "", f[d].key);
+        k += w > 0 ? (size_t)w : 0;
+    }
+}
+
+/* End (offset of the closing quote) of the string whose opening quote q
+ * is at t[i] (json-c takes '...' too). */
+static size_t json_string_end(const char *t, size_t i, size_t n)
+{
+    char q = t[i];
+    for (i++; i < n && t[i] != q; i++)
+        if (t[i] == '\\') i++;
+    return i;
+}
+
+/* Every number literal of a JSON text json-c has accepted (t[n] == 0),
+ * checked on its own text with drape_units_strtod: the first that
+ * overflows, underflows or is denormal (json-c would give inf, 0 or the
+ * denormal) is an E_INPUT error at path:line:column with its key path. */
+static int json_numbers_in_range(const char *t, size_t n, const char *path, drape_error *err)
+{
+    json_frame f[JSON_SCAN_DEPTH];
+    int depth = 0;
+    for (size_t i = skip_blank(t, 0, n); i < n; i = skip_blank(t, i, n)) {
+        json_frame *top = depth > 0 && depth <= JSON_SCAN_DEPTH ? &f[depth - 1] : NULL;
+        char c = t[i];
+        if (c == '{' || c == '[') {
+            if (depth < JSON_SCAN_DEPTH)
+                f[depth] = (json_frame){.kind = c, .want_key = c == '{', .index = 0, .key = ""};
+            depth++, i++;
+        } else if (c == '}' || c == ']') {
+            depth--, i++;
+        } else if (c == ',') {
+            if (top && top->kind == '[') top->index++;
+            if (top && top->kind == '{') top->want_key = 1;
+            i++;
+        } else if (c == ':') {
+            if (top) top->want_key = 0;
+            i++;
+        } else if (c == '"' || c == '\'') {
+            size_t e = json_string_end(t, i, n);
+            if (top && top->kind == '{' && top->want_key)
+                snprintf(top->key, sizeof top->key, "%.*s", (int)(e - i - 1), t + i + 1);
+            i = e + 1;
+        } else if (c == '-' || (c >= '0' && c <= '9')) {
+            char *end;
+            int range;
+            if (c == '-' && !(t[i + 1] >= '0' && t[i + 1] <= '9') && t[i + 1] != '.') {
+                i++; /* -Infinity, -NaN: a word follows */
+                continue;
+            }
+            drape_units_strtod(t + i, &end, &range);
+            if (range) {
+                int line, col;
+                char key[DRAPE_ERROR_KEY_MAX];
+                line_col(t, i, &line, &col);
+                json_key_path(f, depth < JSON_SCAN_DEPTH ? depth : JSON_SCAN_DEPTH, key, sizeof key);
+                return drape_error_set(err, DRAPE_E_INPUT, path, line, col, key[0] ? key : NULL,
+                                       "number out of range: \"%.*s\" (a magnitude from %.1e to "
+                                       "%.1e, or 0)", (int)(end - (t + i)), t + i, DBL_MIN,
+                                       DBL_MAX);
+            }
+            i = end > t + i ? (size_t)(end - t) : i + 1;
+        } else {
+            i++; /* true, false, null, NaN, Infinity */
+        }
+    }
+    return 0;
+}
+
 struct json_object *drape_cli_read_json(const char *path, size_t max, drape_error *err)
+{
+    return read_json(path, max, 0, err);
+}
+
+struct json_object *drape_cli_read_json_in_range(const char *path, size_t max, drape_error *err)
+{
+    return read_json(path, max, 1, err);
+}
+
+static struct json_object *read_json(const char *path, size_t max, int in_range, drape_error *err)
 {
     size_t len;
     json_object *root = NULL;
@@ -468,6 +570,9 @@ struct json_object *drape_cli_read_json(const char *path, size_t max, drape_erro
         line_col(text, rest, &line, &col);
         drape_error_set(err, DRAPE_E_SYNTAX, path, line, col, NULL,
                         "text after the end of the JSON object");
+        json_object_put(root);
+        root = NULL;
+    } else if (in_range && json_numbers_in_range(text, len, path, err) != 0) {
         json_object_put(root);
         root = NULL;
     }

@@ -57,6 +57,16 @@ int drape_cli_file_sum(const char *path, size_t max, unsigned long long *sum,
  * (LF, CR LF and CR alone each end a line), E_IO or E_NOMEM. */
 struct json_object *drape_cli_read_json(const char *path, size_t max, drape_error *err);
 
+/* drape_cli_read_json, and every number in the file, checked on its own
+ * text with drape_units_strtod (units.h), must be a normal double or 0:
+ * one that overflows (1e400), underflows (1e-400) or is denormal (1e-310)
+ * is an E_INPUT error at path:line:column naming its key path
+ * ("bending[2][4]", "specimens[3].dc"), where json-c would give inf, 0
+ * or the denormal.  For the files a person hands to drape (import's
+ * ARCSim materials, compare's results); drape's own manifests are read
+ * as they are. */
+struct json_object *drape_cli_read_json_in_range(const char *path, size_t max, drape_error *err);
+
 /* Replace a file atomically: open writes to PATH.tmp.PID next to it;
  * commit flushes, fsyncs and renames it over PATH; abort removes it.  A
  * reader sees either the old or the new file, never a partial one. */
