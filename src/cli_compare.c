@@ -21,7 +21,9 @@
  *
  * and the inputs' n, dc, dc_ci95, nodes_hist and those five keys.  Issue 15 item 3 judges a
  * fast method against the accurate one by exactly these numbers
- * (docs/ensemble.md).  Exit status 0, or 1/3 for unreadable input.
+ * (docs/ensemble.md).  Exit status 0, or 1/3 for unreadable input; a
+ * number outside the normal doubles anywhere in a file is refused at its
+ * line and key (drape_cli_read_json_in_range, as `drape import` reads).
  */
 #include <math.h>
 #include <stdio.h>
@@ -101,7 +103,7 @@ static int field(const char *path, json_object *o, const char *key, const char *
  * of one specimen written before ensembles, from dc and nodes). */
 static int load(const char *path, side *s, json_object **keep, drape_error *err)
 {
-    json_object *o = drape_cli_read_json(path, (size_t)64 << 20, err);
+    json_object *o = drape_cli_read_json_in_range(path, (size_t)64 << 20, err);
     if (!o) return -1;
     if (!json_object_is_type(o, json_type_object)) {
         json_object_put(o);

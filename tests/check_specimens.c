@@ -909,6 +909,40 @@ START_TEST(test_compare_distributions)
 }
 END_TEST
 
+/* compare reads numbers as import does: one outside the normal doubles,
+ * anywhere in a result, is refused on its own text (exit 1, nothing on
+ * stdout) at file:line:column with its key, places counted by hand; json-c
+ * alone read 1e-400 as a DC of 0, kept 1e-310 and gave 1e400 no line. */
+START_TEST(test_compare_number_range)
+{
+    static const char *const bad[][2] = {
+        {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": 4},\n {\"dc\": 1e-400, \"nodes\": 5}], "
+         "\"cpu_s\": 2}", "cmp.json:2:9: specimens[1].dc: number out of range: \"1e-400\""},
+        {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": 4},\n {\"dc\": 1e-310, \"nodes\": 5}], "
+         "\"cpu_s\": 2}", "cmp.json:2:9: specimens[1].dc: number out of range"},
+        {"{\"specimens\": [{\"dc\": 0.4, \"nodes\": 4},\n {\"dc\": 1e400, \"nodes\": 5}], "
+         "\"cpu_s\": 2}", "cmp.json:2:9: specimens[1].dc: number out of range"},
+        {"{\"dc\": 0.4,\r\n\"nodes\": 4,\r\n\"cpu_s\": 1e-400}", "cmp.json:3:10: cpu_s: number out of range"},
+        {"{\"dc\": 0.4,\r\"nodes\": 4,\r\"spacing_m\": -1e999}", "cmp.json:3:14: spacing_m: number out of range"},
+        /* a key compare does not read is a number of the file all the same */
+        {"{\"dc\": 0.4, \"nodes\": 4, \"energy_J\": {\"kinetic\": 1e-320}}",
+         "cmp.json:1:49: energy_J.kinetic: number out of range"}};
+    char args[1200], ref[512];
+    snprintf(ref, sizeof ref, "%s", tu_write_file("ref.json", "{\"dc\": 0.5, \"nodes\": 3, \"cpu_s\": 1}"));
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        snprintf(args, sizeof args, "compare %s %s", ref, tu_write_file("cmp.json", bad[k][0]));
+        int st = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(st == 1 && strstr(err, bad[k][1]) && out[0] == 0,
+                      "case %zu: exit %d, expected `%s` in: %s", k, st, bad[k][1], err);
+    }
+    /* the smallest normal double and an exact zero are numbers */
+    snprintf(args, sizeof args, "compare %s %s", ref,
+             tu_write_file("cmp.json", "{\"dc\": 0.4, \"nodes\": 4, \"cpu_s\": "
+                                       "2.2250738585072014e-308, \"spacing_m\": 0e-400}"));
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+}
+END_TEST
+
 /* The fabric's warnings about its bias curve come only with the bias term:
  * a run in the seed's model (--terms without bias) does not print them, a
  * run with it does; the other warnings (slope jumps of the warp curve)
@@ -947,5 +981,8 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_compare_distributions);
     tcase_add_test(tc, test_bias_warnings_with_term);
     suite_add_tcase(s, tc);
+    TCase *cmp = tcase_create("compare"); /* quick: no run */
+    tcase_add_test(cmp, test_compare_number_range);
+    suite_add_tcase(s, cmp);
     return s;
 }
