@@ -7,8 +7,10 @@
  * CSV (RFC 4180, https://www.rfc-editor.org/rfc/rfc4180): records end with
  * LF or CRLF; fields are separated by commas; a field may be enclosed in
  * double quotes, inside which commas, line breaks and doubled quotes ("")
- * are literal.  Accepted beyond the RFC: LF alone, a missing final line
- * break, a UTF-8 byte order mark at the start.  Rejected: a quote inside an
+ * are literal.  Accepted beyond the RFC: LF alone, CR alone (old Mac
+ * Excel's export; the RFC allows no CR outside quotes), a missing final
+ * line break, a UTF-8 byte order mark at the start.  Lines are counted
+ * for messages with each of LF, CR LF and CR one break.  Rejected: a quote inside an
  * unquoted field, text after a closing quote, an unterminated quote, NUL
  * bytes.  There is no CSV library among the Debian -dev packages drape
  * builds on, hence this reader (docs/batch.md). */
@@ -23,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <signal.h>
+#include <stdint.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #ifdef __linux__
@@ -150,6 +153,17 @@ void drape_cli_afile_abort(drape_cli_afile *a)
     if (a->tmp[0]) unlink(a->tmp);
 }
 
+/* ---- line breaks ------------------------------------------------------------ */
+
+/* 1 if t[i] is the last byte of a line break: LF, or a CR not followed by
+ * LF (old Mac files).  LF, CR LF and CR alone each end one line, as
+ * libyaml and drape's YAML messages count them (docs/fabrics.md).  t[len]
+ * may be read when it is a NUL terminator (len = SIZE_MAX: NUL-terminated). */
+static int line_ends_at(const char *t, size_t i, size_t len)
+{
+    return t[i] == '\n' || (t[i] == '\r' && !(i + 1 < len && t[i + 1] == '\n'));
+}
+
 /* ---- CSV ------------------------------------------------------------------- */
 
 void drape_cli_csv_rec_free(drape_cli_csv_rec *r)
@@ -219,8 +233,8 @@ int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
                                     "NUL byte in a CSV file");
                     goto fail;
                 } else {
+                    if (line_ends_at(text, p->off, len)) p->line++, p->col = 0;
                     p->off++, p->col++;
-                    if (ch == '\n') p->line++, p->col = 1;
                 }
                 if (n + 1 >= cap) {
                     size_t nc = cap ? cap * 2 : 64;
@@ -231,7 +245,7 @@ int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
                 buf[n++] = ch;
             }
             if (p->off < len && text[p->off] != ',' && text[p->off] != '\n' &&
-                !(text[p->off] == '\r' && p->off + 1 < len && text[p->off + 1] == '\n')) {
+                text[p->off] != '\r') {
                 drape_error_set(err, DRAPE_E_INPUT, file, p->line, p->col, NULL,
                                 "text after the closing quote of a field "
                                 "(a quote inside a quoted field is written \"\")");
@@ -241,7 +255,7 @@ int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
         } else {
             size_t start = p->off;
             while (p->off < len && text[p->off] != ',' && text[p->off] != '\n' &&
-                   !(text[p->off] == '\r' && p->off + 1 < len && text[p->off + 1] == '\n')) {
+                   text[p->off] != '\r') {
                 if (text[p->off] == '"') {
                     drape_error_set(err, DRAPE_E_INPUT, file, p->line, p->col, NULL,
                                     "quote inside an unquoted field (enclose the "
@@ -262,8 +276,8 @@ int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
             p->off++, p->col++;
             continue;
         }
-        /* end of record: LF or CRLF */
-        p->off += text[p->off] == '\r' ? 2 : 1;
+        /* end of record: LF, CR LF or CR */
+        p->off += line_ends_at(text, p->off, len) ? 1 : 2;
         p->line++, p->col = 1;
         break;
     }
@@ -407,14 +421,13 @@ void drape_cli_warn(void *ctx, const drape_error *w)
 
 /* ---- JSON --------------------------------------------------------------- */
 
-/* Line and column (1-based) of byte off of a NUL-terminated text.  LF,
- * CR LF and CR alone (old Mac files) each end one line, as libyaml and
- * drape's YAML messages count them (docs/fabrics.md). */
+/* Line and column (1-based) of byte off of a NUL-terminated text, lines
+ * ending as line_ends_at says. */
 static void line_col(const char *text, size_t off, int *line, int *col)
 {
     *line = 1, *col = 1;
     for (size_t i = 0; i < off && text[i]; i++) {
-        if (text[i] == '\n' || (text[i] == '\r' && text[i + 1] != '\n')) (*line)++, *col = 1;
+        if (line_ends_at(text, i, SIZE_MAX)) (*line)++, *col = 1;
         else (*col)++;
     }
 }

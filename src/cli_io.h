@@ -94,8 +94,8 @@ typedef struct drape_cli_csv_rec {
 } drape_cli_csv_rec;
 /* Read the next record of text[0..len).  Returns 1 and fills *r (caller
  * frees with drape_cli_csv_rec_free), 0 at the end of the text, or -1 and
- * fills err (file:line:column) for malformed CSV.  A blank line is a
- * record of one empty field. */
+ * fills err (file:line:column) for malformed CSV.  A record ends at LF,
+ * CR LF or CR alone; a blank line is a record of one empty field. */
 int drape_cli_csv_next(const char *text, size_t len, drape_cli_csv_pos *p,
                        drape_cli_csv_rec *r, const char *file, drape_error *err);
 void drape_cli_csv_rec_free(drape_cli_csv_rec *r);

@@ -468,6 +468,39 @@ START_TEST(test_kes_errors)
 }
 END_TEST
 
+/* A KES table saved with LF, CR LF or CR alone (old Mac Excel's CSV) is
+ * the same table: an error's line counts each break once, inside a quoted
+ * field too (lines counted by hand), and the good table imports. */
+START_TEST(test_kes_line_endings)
+{
+    static const char *const eol[3] = {"\n", "\r\n", "\r"};
+    static const char hdr[] = "name,weight_g_m2,k_warp_N_m,k_weft_N_m,B_warp,B_weft,G_warp,G_weft,"
+                              "description";
+    const char *dir = subdir("kes-eol");
+    char text[1024], args[1024], path[1024];
+    for (int k = 0; k < 3; k++) {
+        const char *e = eol[k];
+        snprintf(text, sizeof text, "%s%sok,100,1,1,0.1,0.1,1,1,\"line one%sline two\"%s"
+                 "bad,100,1,1,0.1,x,1,1,%s", hdr, e, e, e, e);
+        snprintf(args, sizeof args, "import kes %s --out-dir %s", tu_write_file("t.csv", text), dir);
+        int rc = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(rc == 1 && strstr(err, "t.csv:4:17: B_weft: expected a number"),
+                      "line ending %d: exit %d, %s", k, rc, err);
+        snprintf(text, sizeof text, "%s%sok,150,1,1,0.1,0.1,1,1,\"line one%sline two\"%s", hdr, e,
+                 e, e);
+        snprintf(args, sizeof args, "import kes %s --out-dir %s --force",
+                 tu_write_file("t.csv", text), dir);
+        rc = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(rc == 0, "line ending %d: exit %d, %s", k, rc, err);
+        drape_fabric f;
+        snprintf(path, sizeof path, "%s/ok.yaml", dir);
+        load(path, &f);
+        ck_assert_close_rel(f.weight, 0.150, 1e-15); /* 150 g/m^2 */
+        ck_assert_int_eq(unlink(path), 0);
+    }
+}
+END_TEST
+
 Suite *import_suite(void)
 {
     Suite *s = suite_create("import");
@@ -480,6 +513,7 @@ Suite *import_suite(void)
     tcase_add_test(tc, test_arcsim_number_range);
     tcase_add_test(tc, test_kes_table);
     tcase_add_test(tc, test_kes_errors);
+    tcase_add_test(tc, test_kes_line_endings);
     suite_add_tcase(s, tc);
     return s;
 }
