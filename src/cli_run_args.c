@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -184,6 +185,22 @@ static const char run_usage[] =
 
 
 /* ---- parsing ------------------------------------------------------------ */
+
+/* --resume DIR: DIR must be a directory (an E_IO error naming DIR, not
+ * one naming a file inside it that is missing only because DIR is). */
+static int resume_dir_check(const char *dir, drape_error *err)
+{
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "--resume: cannot use this directory: %s (give the --out DIR "
+                               "of the interrupted run)", strerror(errno));
+    if (!S_ISDIR(st.st_mode))
+        return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL,
+                               "--resume: not a directory (give the --out DIR of the "
+                               "interrupted run)");
+    return 0;
+}
 
 static int usage_error(const char *fmt, const char *a, const char *b)
 {
@@ -492,6 +509,12 @@ int drape_cli_run(int argc, char **argv)
     ra.csv = csv;
     ra.quiet = quiet;
     if (resume_dir) {
+        drape_error derr;
+        drape_error_clear(&derr);
+        if (resume_dir_check(resume_dir, &derr) != 0) {
+            drape_cli_print_error(&derr);
+            return drape_error_exit_status(derr.kind);
+        }
         /* an ensemble's directory has its manifest (docs/ensemble.md); a
          * single run's, its checkpoint DIR/drape.h5 */
         char manifest[4200];

@@ -462,6 +462,31 @@ START_TEST(test_dir_in_use)
 }
 END_TEST
 
+/* --resume DIR where DIR is missing or is not a directory: the error
+ * names DIR itself (it named DIR/drape.h5, "no such file", as though DIR
+ * were a directory without a checkpoint), exit 3, nothing written. */
+START_TEST(test_resume_no_dir)
+{
+    char dir[600], file[600], args[1400], want[800];
+    snprintf(dir, sizeof dir, "%s/no-such-dir", tu_scratch_dir());
+    sh("rm -rf %s", dir);
+    snprintf(args, sizeof args, "run --resume %s", dir);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    snprintf(want, sizeof want, "drape: %s: --resume: cannot use this directory: ", dir);
+    ck_assert_msg(st == 3 && out[0] == 0 && strncmp(err, want, strlen(want)) == 0 &&
+                      strstr(err, "No such file or directory"), "exit %d, %s", st, err);
+    sh("test ! -e %s", dir);
+    snprintf(file, sizeof file, "%s/not-a-dir", tu_scratch_dir());
+    sh("echo x > %s", file);
+    snprintf(args, sizeof args, "run --resume %s", file);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    snprintf(want, sizeof want, "drape: %s: --resume: not a directory", file);
+    ck_assert_msg(st == 3 && out[0] == 0 && strncmp(err, want, strlen(want)) == 0, "exit %d, %s",
+                  st, err);
+    sh("test \"$(cat %s)\" = x", file);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -474,5 +499,9 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(tc, test_resume_killed_cpu);
     tcase_add_test(tc, test_dir_in_use);
     suite_add_tcase(s, tc);
+    TCase *quick = tcase_create("quick"); /* no specimen runs, or small fall ones */
+    tcase_set_timeout(quick, 120);
+    tcase_add_test(quick, test_resume_no_dir);
+    suite_add_tcase(s, quick);
     return s;
 }
