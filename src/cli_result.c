@@ -3,6 +3,7 @@
  * numbers keep drape's %.10g text (json_object_new_double_s). */
 #include "cli_result.h"
 
+#include <ctype.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +12,7 @@
 
 #include "cli.h"
 #include "cli_io.h"
+#include "drape/units.h"
 
 static drape_cli_field *push(drape_cli_result *r, const char *key, drape_cli_ftype t)
 {
@@ -264,6 +266,26 @@ void drape_cli_result_write(FILE *out, const drape_cli_result *r)
     }
 }
 
+int drape_cli_result_parse_num(const char *s, const char **end, double *v)
+{
+    size_t n = strcspn(s, " \t\n");
+    char buf[64];
+    if (n == 0 || n >= sizeof buf) return -1;
+    memcpy(buf, s, n);
+    buf[n] = 0;
+    char *e;
+    int range;
+    double x = drape_units_strtod(buf, &e, &range);
+    if (e == buf || *e) return -1;
+    /* (nan and inf are spelled with letters; an overflow or an underflow
+     * to zero is a literal that lies outside the doubles) */
+    const char *b = buf + (buf[0] == '-' || buf[0] == '+');
+    if (range && !isalpha((unsigned char)*b) && !(isfinite(x) && x != 0.0)) return -1;
+    *v = x;
+    if (end) *end = s + n;
+    return 0;
+}
+
 int drape_cli_result_read(const char *text, drape_cli_result *r)
 {
     r->n = 0;
@@ -280,9 +302,14 @@ int drape_cli_result_read(const char *text, drape_cli_result *r)
         key[kl] = 0;
         memcpy(val, t1 + 3, (size_t)vl);
         val[vl] = 0;
+        double x;
+        const char *e;
+        if ((t1[1] == 'n' || t1[1] == 'i') &&
+            (drape_cli_result_parse_num(val, &e, &x) != 0 || *e))
+            return -1; /* not a number, or more than one */
         switch (t1[1]) {
-        case 'n': drape_cli_result_num(r, key, strtod(val, NULL)); break;
-        case 'i': drape_cli_result_int(r, key, strtod(val, NULL)); break;
+        case 'n': drape_cli_result_num(r, key, x); break;
+        case 'i': drape_cli_result_int(r, key, x); break;
         case 's':
             unescape_text(val);
             drape_cli_result_str(r, key, val);

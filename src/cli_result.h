@@ -82,4 +82,15 @@ void drape_cli_result_print_csv(FILE *out, const drape_cli_result *r);
 void drape_cli_result_write(FILE *out, const drape_cli_result *r);
 int drape_cli_result_read(const char *text, drape_cli_result *r);
 
+/* One number of the line format, of result.txt's @ lines and of the
+ * @shadow line: the token at s (up to a blank, tab, newline or the end)
+ * read whole with drape_units_strtod.  Taken: a finite double (a denormal
+ * too: %.17g writes it exactly) and printf's own text of a non-finite
+ * value ("nan", "-nan", "inf", "-inf": null).  Refused: anything else
+ * ("x", "1x", an empty token), a literal that overflows ("1e999") or
+ * underflows to zero ("1e-400").  0 with *v and *end (past the token; end
+ * may be NULL), or -1.  The one number reader of these files (a damaged
+ * number read as 0 halved a mean). */
+int drape_cli_result_parse_num(const char *s, const char **end, double *v);
+
 #endif /* DRAPE_CLI_RESULT_H */

@@ -201,29 +201,36 @@ static int drain(child *c)
     return 0;
 }
 
-/* Split the "@shadow" line off and parse both parts. */
+/* The next number of the @shadow line at *p (advanced past it and the
+ * blank after it); 0, or -1 (drape_cli_result_parse_num). */
+static int shadow_num(const char **p, double *v)
+{
+    if (drape_cli_result_parse_num(*p, p, v) != 0) return -1;
+    if (**p == ' ') (*p)++;
+    return 0;
+}
+
+/* Split the "@shadow" line off and parse both parts: "@shadow\tcx cy n
+ * threshold r_1 ... r_n\n", every number whole. */
 static void parse_child(child *c)
 {
     if (!c->buf) return;
     char *sh = strstr(c->buf, "@shadow\t");
     if (sh) {
         *sh = 0;
-        char *p = sh + 8, *end;
-        c->cx = strtod(p, &end);
-        c->cy = strtod(end, &end);
-        long n = strtol(end, &end, 10);
-        c->thr = strtod(end, &end);
-        if (n > 0 && n < 100000 && (c->radii = drape_calloc((size_t)n, sizeof(double)))) {
-            int k = 0;
-            for (; k < n; k++) {
-                char *e2;
-                c->radii[k] = strtod(end, &e2);
-                if (e2 == end) break;
-                end = e2;
-            }
-            c->n_radii = k == n ? (int)n : 0;
+        const char *p = sh + 8;
+        double cx, cy, nd, thr;
+        if (shadow_num(&p, &cx) == 0 && shadow_num(&p, &cy) == 0 && shadow_num(&p, &nd) == 0 &&
+            shadow_num(&p, &thr) == 0 && nd > 0 && nd < 100000 && nd == floor(nd) &&
+            (c->radii = drape_calloc((size_t)nd, sizeof(double)))) {
+            int n = (int)nd, k = 0;
+            c->cx = cx;
+            c->cy = cy;
+            c->thr = thr;
+            while (k < n && shadow_num(&p, &c->radii[k]) == 0) k++;
+            c->n_radii = k == n ? n : 0;
             /* (the line ends after its last sample: not cut short) */
-            c->shadow_whole = c->n_radii > 0 && *end == '\n';
+            c->shadow_whole = c->n_radii > 0 && *p == '\n';
         }
     }
     c->have_res = drape_cli_result_read(c->buf, &c->res) == 0 && c->res.n > 0;

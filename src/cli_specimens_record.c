@@ -20,6 +20,7 @@
 
 #include "cli.h"
 #include "cli_io.h"
+#include "cli_result.h"
 #include "drape/alloc.h"
 #include "drape/output.h"
 #include "drape/scene.h"
@@ -231,8 +232,25 @@ char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, do
         drape_free(text);
         return NULL; /* another ensemble's, or not one at all: run it */
     }
-    *exit_status = atoi(ex);
-    *cpu_s = strtod(cpu, NULL);
+    /* this ensemble's specimen: its exit status and CPU time must be ones
+     * (a damaged @cpu_s 1e999 made the ensemble's cpu_s inf, and
+     * ensemble.json invalid JSON) */
+    const char *e1, *e2;
+    double xv, cv;
+    const char *bad = drape_cli_result_parse_num(ex, &e1, &xv) != 0 || *e1 || xv != floor(xv) ||
+                              !(xv >= 0 && xv <= 255)
+                          ? "@exit is not an exit status (an integer from 0 to 255)"
+                      : drape_cli_result_parse_num(cpu, &e2, &cv) != 0 || *e2 || !isfinite(cv) ||
+                              !(cv >= 0)
+                          ? "@cpu_s is not a CPU time (a finite number of seconds, >= 0)"
+                          : NULL;
+    if (bad) {
+        fprintf(stderr, "drape: %s: warning: %s; the specimen runs again\n", path, bad);
+        drape_free(text);
+        return NULL;
+    }
+    *exit_status = (int)xv;
+    *cpu_s = cv;
     memmove(text, p, strlen(p) + 1);
     return text;
 }

@@ -487,6 +487,106 @@ START_TEST(test_resume_no_dir)
 }
 END_TEST
 
+/* A fall ensemble of 3 specimens (3 cm) with --out, its result as the
+ * reference, its manifest then set to interrupted (for the damaged
+ * result files the tests below make). */
+static void fall3(const char *dir, char *ref)
+{
+    char args[1400];
+    sh("rm -rf %s", dir);
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm --specimens 3 -j 2 "
+             "--out %s", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    memcpy(ref, out, CAP);
+    sh("sed -i 's/\"status\":\"equilibrium\"/\"status\":\"interrupted\"/' %s/ensemble.json && "
+       "grep -q '\"status\":\"interrupted\"' %s/ensemble.json", dir, dir);
+}
+
+/* The warning that specimen k's result.txt is not used (why: its text). */
+static void assert_rerun_warning(const char *dir, int k, const char *why)
+{
+    char name[800];
+    snprintf(name, sizeof name, "drape: %s/specimen-%03d/result.txt: warning: %s", dir, k, why);
+    ck_assert_msg(strstr(err, name), "no warning for specimen %d (%s): %s", k, why, err);
+}
+
+/* The @ lines of a stored result.txt out of range: @cpu_s 1e999 (read as
+ * inf: the ensemble's cpu_s was inf, null in the result and `inf` in
+ * ensemble.json, which was then not JSON), @cpu_s -1, @exit 999 and @exit
+ * x (atoi).  Each such specimen runs again with a warning naming the
+ * file; the result is the uninterrupted one with a finite cpu_s, and the
+ * manifest stays JSON. */
+START_TEST(test_resume_damaged_header)
+{
+    char dir[600], args[1400], ref[CAP], man[700];
+    snprintf(dir, sizeof dir, "%s/ens-header", tu_scratch_dir());
+    fall3(dir, ref);
+    json_object *r = parse(ref);
+    ino_t kept = inode(dir, "specimen-003/result.txt");
+    sh("cd %s && sed -i 's/^@cpu_s\t.*/@cpu_s\t1e999/' specimen-001/result.txt && "
+       "sed -i 's/^@exit\t.*/@exit\t999/' specimen-002/result.txt && "
+       "grep -q '^@cpu_s\t1e999$' specimen-001/result.txt && "
+       "grep -q '^@exit\t999$' specimen-002/result.txt", dir);
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    assert_rerun_warning(dir, 1, "@cpu_s is not a CPU time");
+    assert_rerun_warning(dir, 2, "@exit is not an exit status");
+    ck_assert_msg(!strstr(err, "specimen-003"), "%s", err);
+    ck_assert(inode(dir, "specimen-003/result.txt") == kept);
+    json_object *g = parse(out);
+    assert_same_ensemble(r, g);
+    ck_assert_msg(isfinite(jnum(g, "cpu_s")) && jnum(g, "cpu_s") >= 0, "%s", out);
+    json_object_put(g);
+    snprintf(man, sizeof man, "%s/ensemble.json", dir);
+    json_object *m = json_object_from_file(man);
+    ck_assert_msg(m != NULL, "%s is not JSON", man);
+    ck_assert_msg(isfinite(jnum(m, "cpu_s")), "manifest cpu_s %g", jnum(m, "cpu_s"));
+    json_object_put(m);
+    /* stored again, with what ran */
+    sh("cd %s && grep -q '^@exit\t0$' specimen-002/result.txt && "
+       "! grep -q '^@cpu_s\t1e999$' specimen-001/result.txt", dir);
+
+    /* the other two: a negative CPU time, an exit status that is text */
+    sh("cd %s && sed -i 's/^@cpu_s\t.*/@cpu_s\t-1/' specimen-001/result.txt && "
+       "sed -i 's/^@exit\t.*/@exit\tx/' specimen-002/result.txt && "
+       "sed -i 's/\"status\":\"equilibrium\"/\"status\":\"interrupted\"/' ensemble.json", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    assert_rerun_warning(dir, 1, "@cpu_s is not a CPU time");
+    assert_rerun_warning(dir, 2, "@exit is not an exit status");
+    g = parse(out);
+    assert_same_ensemble(r, g);
+    json_object_put(g);
+    json_object_put(r);
+}
+END_TEST
+
+/* A stored number that is not one: dc `x` was read as 0 (strtod without
+ * its end), and the ensemble's mean DC was two thirds of the true one;
+ * r_min_m `0.25x` (a number and more), nodes `1e999` (an overflow).
+ * Every number is read whole now: each such specimen runs again with a
+ * warning naming its file, and the result is the uninterrupted one. */
+START_TEST(test_resume_result_numbers)
+{
+    char dir[600], args[1400], ref[CAP];
+    snprintf(dir, sizeof dir, "%s/ens-numbers", tu_scratch_dir());
+    fall3(dir, ref);
+    json_object *r = parse(ref);
+    sh("cd %s && sed -i 's/^dc\tn\t.*/dc\tn\tx/' specimen-001/result.txt && "
+       "sed -i 's/^r_min_m\tn\t.*/r_min_m\tn\t0.25x/' specimen-002/result.txt && "
+       "sed -i 's/^nodes\ti\t.*/nodes\ti\t1e999/' specimen-003/result.txt && "
+       "grep -q '^dc\tn\tx$' specimen-001/result.txt && "
+       "grep -q '^r_min_m\tn\t0.25x$' specimen-002/result.txt && "
+       "grep -q '^nodes\ti\t1e999$' specimen-003/result.txt", dir);
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    for (int k = 1; k <= 3; k++) assert_rerun_warning(dir, k, "not a result that can be used");
+    json_object *g = parse(out);
+    assert_same_ensemble(r, g);
+    json_object_put(g);
+    json_object_put(r);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -502,6 +602,8 @@ Suite *specimens_resume_suite(void)
     TCase *quick = tcase_create("quick"); /* no specimen runs, or small fall ones */
     tcase_set_timeout(quick, 120);
     tcase_add_test(quick, test_resume_no_dir);
+    tcase_add_test(quick, test_resume_damaged_header);
+    tcase_add_test(quick, test_resume_result_numbers);
     suite_add_tcase(s, quick);
     return s;
 }
