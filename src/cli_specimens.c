@@ -18,7 +18,9 @@
  * statistic; the run fails (exit 4) only when none produced a result.
  * SIGINT/SIGTERM: no new specimen starts, the running ones stop at their
  * next evaluation (they are sent the signal too), the result says
- * status interrupted and exits 128 + the signal.
+ * status interrupted and exits 128 + the signal.  A signal that comes
+ * when every specimen has finished (before the last is reaped) stops
+ * nothing: the ensemble ends as it would have.
  *
  * With --out DIR the ensemble keeps a record there (cli_specimens.h,
  * cli_specimens_record.c): its manifest, written before the first
@@ -731,7 +733,10 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
     sigaction(SIGTERM, &old_term, NULL);
     if (ens_stop < 0) goto fail;
 
-    int n_failed = 0, n_ok = 0, interrupted = ens_stop > 0;
+    /* interrupted: a specimen is (not started, or stopped by the signal);
+     * a signal that came after every specimen finished (before the last
+     * was reaped) interrupted nothing */
+    int n_failed = 0, n_ok = 0, interrupted = 0;
     const child *first = NULL;
     for (int k = 0; k < n; k++) {
         child *c = &ch[k];
@@ -743,7 +748,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
                               ? "interrupted" : spec_status(c);
         snprintf(p->status, sizeof p->status, "%.15s", stx);
         int ok = ran && spec_ok(c);
-        if (ran && c->have_res && strcmp(p->status, "interrupted") == 0) interrupted = 1;
+        if (strcmp(p->status, "interrupted") == 0) interrupted = 1;
         if (!ok && strcmp(p->status, "interrupted") != 0) {
             n_failed++;
             snprintf(p->status, sizeof p->status, "failed");

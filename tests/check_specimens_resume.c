@@ -6,6 +6,7 @@
  * as one never started), and made real with SIGTERM on a dynamic
  * ensemble, whose first specimen then continues from its checkpoint.
  * The resumed ensemble is compared with the uninterrupted one. */
+#include <dirent.h>
 #include <math.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -587,6 +588,126 @@ START_TEST(test_resume_result_numbers)
 }
 END_TEST
 
+/* The children of process pid (from /proc/PID/stat: the state after the
+ * name in parentheses, then the parent's pid): their number, and in
+ * *zombies how many have exited and wait to be reaped. */
+static int children_of(pid_t pid, int *zombies)
+{
+    DIR *d = opendir("/proc");
+    ck_assert_ptr_nonnull(d);
+    int n = 0;
+    *zombies = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        if (e->d_name[0] < '1' || e->d_name[0] > '9') continue;
+        char path[300], buf[1024];
+        snprintf(path, sizeof path, "/proc/%s/stat", e->d_name);
+        FILE *f = fopen(path, "r");
+        if (!f) continue; /* (gone meanwhile) */
+        size_t len = fread(buf, 1, sizeof buf - 1, f);
+        fclose(f);
+        buf[len] = 0;
+        char *rp = strrchr(buf, ')'), state;
+        long ppid;
+        if (rp && sscanf(rp + 1, " %c %ld", &state, &ppid) == 2 && ppid == (long)pid) {
+            n++;
+            *zombies += state == 'Z';
+        }
+    }
+    closedir(d);
+    return n;
+}
+
+static int count_files(const char *fmt, const char *dir, int n)
+{
+    int c = 0;
+    for (int k = 1; k <= n; k++) {
+        char p[800];
+        snprintf(p, sizeof p, fmt, dir, k);
+        c += access(p, F_OK) == 0;
+    }
+    return c;
+}
+
+/* A signal that arrives after every specimen finished, before the
+ * ensemble reaped the last one (or while it writes its result), marked
+ * the whole ensemble interrupted (exit 143, status interrupted, the
+ * manifest too) although every specimen had its result.  Made
+ * deterministic: the ensemble is stopped (SIGSTOP) while its specimens
+ * run, they are left to end (zombies, not yet reaped), SIGTERM is sent
+ * while it is stopped and it is continued (SIGCONT): the handler runs
+ * before it reaps them.  Every specimen finished: status equilibrium,
+ * exit 0, the manifest says equilibrium. */
+START_TEST(test_signal_after_last_specimen)
+{
+    char dir[600], o_path[600], e_path[600], man[700];
+    snprintf(dir, sizeof dir, "%s/ens-late-signal", tu_scratch_dir());
+    snprintf(o_path, sizeof o_path, "%s/late.stdout", tu_scratch_dir());
+    snprintf(e_path, sizeof e_path, "%s/late.stderr", tu_scratch_dir());
+    sh("rm -rf %s", dir);
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen(o_path, "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
+        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "3cm",
+              "--specimens", "2", "-j", "2", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    /* stopped where every specimen not stored yet is running (or done) */
+    struct timespec ts = {0, 200 * 1000};
+    int ws, zombies = 0, ready = 0;
+    for (int i = 0; i < 200000 && !ready; i++) {
+        kill(pid, SIGSTOP);
+        ck_assert_int_eq(waitpid(pid, &ws, WUNTRACED), pid);
+        ck_assert_msg(WIFSTOPPED(ws), "drape ended before its specimens were seen (%d)", ws);
+        int nc = children_of(pid, &zombies);
+        ready = nc > 0 && nc + count_files("%s/specimen-%03d/result.txt", dir, 2) == 2;
+        if (!ready) {
+            kill(pid, SIGCONT);
+            nanosleep(&ts, NULL);
+        }
+    }
+    ck_assert_msg(ready, "never caught the specimens running");
+    /* the specimens end; the stopped ensemble cannot reap them */
+    struct timespec ms = {0, 1000 * 1000};
+    int nc = children_of(pid, &zombies);
+    for (int i = 0; i < 120000 && zombies < nc; i++) {
+        nanosleep(&ms, NULL);
+        nc = children_of(pid, &zombies);
+    }
+    ck_assert_msg(zombies == nc, "%d of %d specimens ended", zombies, nc);
+    kill(pid, SIGTERM);
+    kill(pid, SIGCONT);
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    FILE *f = fopen(o_path, "r");
+    size_t n = f ? fread(out, 1, CAP - 1, f) : 0;
+    out[n] = 0;
+    if (f) fclose(f);
+    f = fopen(e_path, "r");
+    n = f ? fread(err, 1, CAP - 1, f) : 0;
+    err[n] = 0;
+    if (f) fclose(f);
+    ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "status %d, %s", ws, err);
+    ck_assert_msg(!strstr(err, "interrupted"), "%s", err);
+    json_object *g = parse(out), *sp;
+    ck_assert_str_eq(jstr(g, "status"), "equilibrium");
+    ck_assert_int_eq((int)jnum(g, "specimens_failed"), 0);
+    ck_assert(json_object_object_get_ex(g, "specimens", &sp));
+    for (int k = 0; k < 2; k++)
+        ck_assert_str_eq(jstr(json_object_array_get_idx(sp, (size_t)k), "status"), "equilibrium");
+    json_object_put(g);
+    snprintf(man, sizeof man, "%s/ensemble.json", dir);
+    json_object *m = json_object_from_file(man);
+    ck_assert_ptr_nonnull(m);
+    ck_assert_str_eq(jstr(m, "status"), "equilibrium");
+    json_object_put(m);
+    ck_assert_int_eq(count_files("%s/specimen-%03d/result.txt", dir, 2), 2);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -604,6 +725,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(quick, test_resume_no_dir);
     tcase_add_test(quick, test_resume_damaged_header);
     tcase_add_test(quick, test_resume_result_numbers);
+    tcase_add_test(quick, test_signal_after_last_specimen);
     suite_add_tcase(s, quick);
     return s;
 }
