@@ -18,6 +18,7 @@
 
 #include "cli.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <float.h>
@@ -362,12 +363,16 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err)
     return 0;
 }
 
-int drape_cli_lock_dir(const char *dir, drape_error *err)
+int drape_cli_lock_dir(const char *dir, int *held, drape_error *err)
 {
+    if (held) *held = 0;
     /* kept open (and locked) until the process exits */
     int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd < 0) return 0; /* not readable (mode -wx): unguarded, the writes will tell */
-    if (flock(fd, LOCK_EX | LOCK_NB) == 0) return 0;
+    if (flock(fd, LOCK_EX | LOCK_NB) == 0) {
+        if (held) *held = 1;
+        return 0;
+    }
     int e = errno;
     close(fd);
     if (e == EWOULDBLOCK)
@@ -380,6 +385,27 @@ int drape_cli_lock_dir(const char *dir, drape_error *err)
      * ENOLCK): the run goes on unguarded, as before the guard */
     (void)err;
     return 0;
+}
+
+int drape_cli_remove_stale_tmp(const char *dir, const char *name)
+{
+    DIR *d = opendir(dir);
+    if (!d) return 0;
+    size_t nl = strlen(name);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        const char *s = e->d_name, *pid = s + nl + 5;
+        if (strncmp(s, name, nl) != 0 || strncmp(s + nl, ".tmp.", 5) != 0 || !*pid ||
+            strspn(pid, "0123456789") != strlen(pid))
+            continue;
+        char path[4400];
+        struct stat st;
+        snprintf(path, sizeof path, "%s/%s", dir, s);
+        if (lstat(path, &st) == 0 && !S_ISDIR(st.st_mode) && unlink(path) == 0) n++;
+    }
+    closedir(d);
+    return n;
 }
 
 int drape_cli_check_target(const char *dir, const char *name, drape_error *err)

@@ -31,8 +31,15 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
  * second drape run, ensemble or --resume with --out DIR while the first
  * still writes there is refused with an E_IO error naming DIR, instead
  * of both writing the same files.  Where the file system cannot lock a
- * directory (NFS) the run goes unguarded.  0, or -1 and err. */
-int drape_cli_lock_dir(const char *dir, drape_error *err);
+ * directory (NFS) the run goes unguarded.  held may be NULL; otherwise
+ * *held = 1 when this process now holds DIR, 0 when it goes unguarded.
+ * 0, or -1 and err. */
+int drape_cli_lock_dir(const char *dir, int *held, drape_error *err);
+/* Remove the temporaries DIR/NAME.tmp.<digits> of NAME (drape_cli_afile's,
+ * left by a process killed outright while it wrote NAME), and no other
+ * file.  Only for a DIR this process holds (drape_cli_lock_dir): no live
+ * writer's temporary is then there.  Returns how many were removed. */
+int drape_cli_remove_stale_tmp(const char *dir, const char *name);
 /* DIR/NAME can be replaced by a file at the end of a run: it does not
  * exist or is not a directory.  0, or -1 with an E_IO error. */
 int drape_cli_check_target(const char *dir, const char *name, drape_error *err);

@@ -493,7 +493,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
         /* one writer at a time (a specimen's directory is its ensemble's) */
-        if (!child && !ra->check_only && drape_cli_lock_dir(out_dir, &err) != 0) goto fail;
+        if (!child && !ra->check_only && drape_cli_lock_dir(out_dir, NULL, &err) != 0) goto fail;
         /* a single run in an ensemble's directory: DIR is this run's now
          * (its shadow.svg replaces the ensemble's), and --resume DIR is
          * its (docs/outputs.md) */

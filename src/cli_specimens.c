@@ -492,6 +492,21 @@ static int read_back(const ens_record *m, child *ch, int n)
     return n_stored;
 }
 
+/* The temporaries of DIR's files and of specimens 1..n's result.txt that
+ * a part killed outright left (NAME.tmp.PID, cli_io.h): removed once DIR
+ * is held (no other drape writes there then). */
+static void remove_stale(const char *dir, int n)
+{
+    drape_cli_remove_stale_tmp(dir, DRAPE_ENSEMBLE_MANIFEST);
+    drape_cli_remove_stale_tmp(dir, "shadow.svg");
+    drape_cli_remove_stale_tmp(dir, "shadow.png");
+    for (int k = 0; k < n; k++) {
+        char sd[4200];
+        snprintf(sd, sizeof sd, "%s/specimen-%03d", dir, k + 1);
+        drape_cli_remove_stale_tmp(sd, ENS_RESULT);
+    }
+}
+
 /* ---- driver ------------------------------------------------------------------- */
 
 int drape_cli_specimens_run(const run_args *a)
@@ -600,9 +615,11 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         cpu_prev = m->cpu_s > cpu_kept ? m->cpu_s : cpu_kept;
         wall_prev = m->wall_s;
     }
+    int held = 0;
     if (a->out_dir && (drape_cli_ensure_dir(a->out_dir, &created_dir, &err) != 0 ||
-                       drape_cli_lock_dir(a->out_dir, &err) != 0))
+                       drape_cli_lock_dir(a->out_dir, &held, &err) != 0))
         goto fail;
+    if (held) remove_stale(a->out_dir, n);
     if (a->out_dir && !a->no_warnings && !resuming) { /* an earlier, larger ensemble's specimens */
         char sd[4200];
         struct stat sst;

@@ -708,6 +708,48 @@ START_TEST(test_signal_after_last_specimen)
 }
 END_TEST
 
+/* Temporaries NAME.tmp.PID of ensemble.json, shadow.svg, shadow.png and
+ * the specimens' result.txt, left by a part killed outright while it
+ * wrote them, stayed in DIR forever.  Once it holds DIR, an ensemble (new
+ * or resumed) removes exactly those (NAME.tmp. and digits), and nothing
+ * else: not other names, nor other suffixes. */
+START_TEST(test_resume_stale_tmp)
+{
+    static const char *const stale[] = {
+        "ensemble.json.tmp.12345", "shadow.svg.tmp.1", "shadow.png.tmp.987654321",
+        "specimen-001/result.txt.tmp.4242", "specimen-003/result.txt.tmp.7", NULL};
+    static const char *const kept[] = {
+        "ensemble.json.tmp.", "ensemble.json.tmp.12a", "shadow.svg.tmp.5.bak", "shadow.svg.tmp-5",
+        "xshadow.png.tmp.5", "notes.tmp.5", "specimen-001/result.txt.tmp.x1",
+        "specimen-002/frame.tmp.3", "specimen-001/result.txt.5.tmp", NULL};
+    char dir[600], args[1400], ref[CAP], p[900];
+    snprintf(dir, sizeof dir, "%s/ens-stale", tu_scratch_dir());
+    for (int pass = 0; pass < 2; pass++) { /* 0: --resume; 1: a new ensemble */
+        if (pass == 0) fall3(dir, ref);
+        for (int i = 0; stale[i]; i++) sh("echo stale > %s/%s", dir, stale[i]);
+        for (int i = 0; kept[i]; i++) sh("echo kept > %s/%s", dir, kept[i]);
+        sh("rm %s/specimen-002/result.txt", dir);
+        if (pass == 0) snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+        else
+            snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --spacing 3cm "
+                     "--specimens 3 -j 2 --out %s", dir);
+        ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+        json_object *g = parse(out), *r = parse(ref);
+        assert_same_ensemble(r, g);
+        json_object_put(g);
+        json_object_put(r);
+        for (int i = 0; stale[i]; i++) {
+            snprintf(p, sizeof p, "%s/%s", dir, stale[i]);
+            ck_assert_msg(access(p, F_OK) != 0, "pass %d: %s is still there", pass, p);
+        }
+        for (int i = 0; kept[i]; i++) {
+            snprintf(p, sizeof p, "%s/%s", dir, kept[i]);
+            ck_assert_msg(access(p, F_OK) == 0, "pass %d: %s was removed", pass, p);
+        }
+    }
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -726,6 +768,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(quick, test_resume_damaged_header);
     tcase_add_test(quick, test_resume_result_numbers);
     tcase_add_test(quick, test_signal_after_last_specimen);
+    tcase_add_test(quick, test_resume_stale_tmp);
     suite_add_tcase(s, quick);
     return s;
 }
