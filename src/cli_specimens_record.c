@@ -276,8 +276,23 @@ int drape_cli_ens_checkpoint(const ens_record *m, int k, double *cpu_s)
         const drape_kv *st = drape_kv_find(c.stats, c.n_stats, "status");
         const drape_kv *id = drape_kv_find(c.run, c.n_run, "ensemble_id");
         const drape_kv *cpu = drape_kv_find(c.stats, c.n_stats, "cpu_s");
+        const drape_kv *sd = drape_kv_find(c.run, c.n_run, "seed");
         ok = st && st->text && strcmp(st->text, "interrupted") == 0 && id && id->text &&
              strcmp(id->text, m->id) == 0;
+        /* this ensemble's, and of this specimen's seed (else another
+         * specimen's run would be reported as this one) */
+        unsigned long want = m->seed0 + (unsigned long)k;
+        if (ok && !(sd && !sd->text && sd->value == (double)want)) {
+            if (sd && !sd->text && !isnan(sd->value))
+                fprintf(stderr, "drape: %s: warning: the checkpoint's seed is %.17g, not this "
+                        "specimen's %lu; the specimen runs again from the start\n", path,
+                        sd->value, want);
+            else
+                fprintf(stderr, "drape: %s: warning: the checkpoint's seed is not stored (this "
+                        "specimen's is %lu); the specimen runs again from the start\n", path,
+                        want);
+            ok = 0;
+        }
         if (ok && cpu && !cpu->text && cpu->value >= 0) *cpu_s = cpu->value;
     }
     drape_h5_checkpoint_free(&c);

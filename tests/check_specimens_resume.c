@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <hdf5.h>
 #include <json-c/json.h>
 
 #include "testutil.h"
@@ -750,6 +751,88 @@ START_TEST(test_resume_stale_tmp)
 }
 END_TEST
 
+/* A dynamic specimen's checkpoint was continued by --resume whatever seed
+ * it stored: one whose seed is not the manifest's seed + k (here 5 for
+ * specimen 1 of seeds 1, 2; or none stored, for specimen 2) was taken as
+ * that specimen's, and the ensemble reported seed 1 for a run of another
+ * seed.  Now such a specimen runs again from the start (its first frame
+ * written again), with a warning naming the checkpoint. */
+START_TEST(test_resume_checkpoint_seed)
+{
+    char dir[600], w1[700], w2[700], args[1400], h5[700];
+    snprintf(dir, sizeof dir, "%s/ens-ck-seed", tu_scratch_dir());
+    snprintf(w1, sizeof w1, "%s/specimen-001/frame_000001.obj", dir);
+    snprintf(w2, sizeof w2, "%s/specimen-002/frame_000001.obj", dir);
+    sh("rm -rf %s", dir);
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    pid_t pid = fork();
+    ck_assert(pid >= 0);
+    if (pid == 0) {
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
+        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
+              "dynamic", "--specimens", "2", "-j", "2", "--out", dir, (char *)NULL);
+        _exit(98);
+    }
+    struct timespec ts = {0, 1000 * 1000};
+    for (int i = 0; i < 30000 && (access(w1, F_OK) != 0 || access(w2, F_OK) != 0); i++) {
+        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", w2);
+        nanosleep(&ts, NULL);
+    }
+    ck_assert_msg(access(w1, F_OK) == 0 && access(w2, F_OK) == 0, "no frames 1");
+    kill(pid, SIGTERM);
+    int ws;
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 143, "status %d", ws);
+    /* specimen 1's checkpoint says seed 5; specimen 2's has none */
+    snprintf(h5, sizeof h5, "%s/specimen-001/drape.h5", dir);
+    hid_t f = H5Fopen(h5, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert(f >= 0);
+    /* (replaced: HDF5 1.10 cannot write an attribute opened in dense
+     * storage, "can't locate open attribute") */
+    ck_assert(H5Adelete_by_name(f, "run", "seed", H5P_DEFAULT) >= 0);
+    hid_t sp1 = H5Screate(H5S_SCALAR);
+    hid_t a = H5Acreate_by_name(f, "run", "seed", H5T_IEEE_F64LE, sp1, H5P_DEFAULT, H5P_DEFAULT,
+                                H5P_DEFAULT);
+    ck_assert(a >= 0);
+    double five = 5.0;
+    ck_assert(H5Awrite(a, H5T_NATIVE_DOUBLE, &five) >= 0);
+    H5Aclose(a);
+    H5Sclose(sp1);
+    H5Fclose(f);
+    snprintf(h5, sizeof h5, "%s/specimen-002/drape.h5", dir);
+    f = H5Fopen(h5, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert(f >= 0);
+    ck_assert(H5Adelete_by_name(f, "run", "seed", H5P_DEFAULT) >= 0);
+    H5Fclose(f);
+    ino_t frame1 = inode(dir, "specimen-001/frame_000000.obj");
+    ino_t frame2 = inode(dir, "specimen-002/frame_000000.obj");
+
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    char want[900];
+    snprintf(want, sizeof want, "drape: %s/specimen-001/drape.h5: warning: the checkpoint's seed "
+             "is 5, not this specimen's 1", dir);
+    ck_assert_msg(strstr(err, want), "%s", err);
+    snprintf(want, sizeof want, "drape: %s/specimen-002/drape.h5: warning: the checkpoint's seed "
+             "is not stored", dir);
+    ck_assert_msg(strstr(err, want), "%s", err);
+    /* run again from the start: frame 0 written anew */
+    ck_assert(inode(dir, "specimen-001/frame_000000.obj") != frame1);
+    ck_assert(inode(dir, "specimen-002/frame_000000.obj") != frame2);
+    json_object *g = parse(out), *sp;
+    ck_assert_str_eq(jstr(g, "status"), "equilibrium");
+    ck_assert(json_object_object_get_ex(g, "specimens", &sp));
+    for (int k = 0; k < 2; k++) {
+        json_object *o = json_object_array_get_idx(sp, (size_t)k);
+        ck_assert_int_eq((int)jnum(o, "seed"), k + 1);
+        ck_assert_str_eq(jstr(o, "status"), "equilibrium");
+    }
+    json_object_put(g);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -770,5 +853,9 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(quick, test_signal_after_last_specimen);
     tcase_add_test(quick, test_resume_stale_tmp);
     suite_add_tcase(s, quick);
+    TCase *seed = tcase_create("seed"); /* the checkpoints' seeds */
+    tcase_set_timeout(seed, 120);
+    tcase_add_test(seed, test_resume_checkpoint_seed);
+    suite_add_tcase(s, seed);
     return s;
 }
