@@ -818,7 +818,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         int na = 0;
         const double *rad = drape_dc_radii(dc, &na);
         drape_svg_specimen sv = {one.seed, one.dc, one.nodes, sh.centre_m[0], sh.centre_m[1],
-                                 rad, na, sh.node_threshold_m};
+                                 rad, na, sh.node_threshold_m, one.seed_unknown};
         if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
     }
     /* the frames stay; until here a failure (closing drape.h5, writing

@@ -781,7 +781,8 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         if (ok && !first) first = c;
         n_ok += ok;
         sv[k] = (drape_svg_specimen){p->seed, p->dc, p->nodes, c->cx, c->cy,
-                                     ok ? c->radii : NULL, ok ? c->n_radii : 0, c->thr};
+                                     ok ? c->radii : NULL, ok ? c->n_radii : 0, c->thr,
+                                     p->seed_unknown};
     }
     /* the inputs (integrator, lattice, options) from any specimen that
      * reported, also when none succeeded (failed, interrupted) */

@@ -105,10 +105,11 @@ int drape_svg_shadow_write(FILE *f, const drape_svg_scene *sc,
         if (!sp[k].r || !isfinite(sp[k].dc)) continue;
         char col[32];
         hue(k, col, sizeof col);
-        fprintf(f, "<polygon class=\"shadow\" data-seed=\"%lu\" data-dc=\"%.4f\" "
-                   "data-nodes=\"%d\" fill=\"%s\" fill-opacity=\"0.06\" stroke=\"%s\" "
-                   "stroke-width=\"0.5\" points=\"",
-                sp[k].seed, sp[k].dc, sp[k].nodes, col, col);
+        fputs("<polygon class=\"shadow\"", f);
+        if (!sp[k].seed_unknown) fprintf(f, " data-seed=\"%lu\"", sp[k].seed);
+        fprintf(f, " data-dc=\"%.4f\" data-nodes=\"%d\" fill=\"%s\" fill-opacity=\"0.06\" "
+                   "stroke=\"%s\" stroke-width=\"0.5\" points=\"",
+                sp[k].dc, sp[k].nodes, col, col);
         for (int j = 0; j < sp[k].n; j++) {
             double th = 2.0 * M_PI * j / sp[k].n;
             fprintf(f, "%s%.2f,%.2f", j ? " " : "", 1e3 * (sp[k].cx + sp[k].r[j] * cos(th)),

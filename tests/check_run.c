@@ -857,6 +857,48 @@ START_TEST(test_resume_seed)
 }
 END_TEST
 
+/* shadow.svg of a resumed Cusick run: each specimen's <polygon> carries
+ * data-seed; a run resumed from a checkpoint without its seed (an older
+ * drape's) printed the scene's seed there (1, for a run of seed 7), where
+ * its result says "seed": null.  It now leaves data-seed out; a
+ * checkpoint that has the seed gives data-seed="7". */
+START_TEST(test_resume_seed_shadow)
+{
+    char dir[600], old[700], wait_for[700], args[3000], svg[800];
+    snprintf(dir, sizeof dir, "%s/interrupted-shadow", tu_scratch_dir());
+    snprintf(wait_for, sizeof wait_for, "%s/frame_000000.obj", dir);
+    const char *a1[] = {"run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
+                        "dynamic", "--specimens", "1", "--seed", "7", "--out", dir, NULL};
+    int code = run_and_signal(wait_for, SIGTERM, a1);
+    ck_assert_msg(code == 143, "exit %d (want 143), stderr: %s", code, err);
+    snprintf(old, sizeof old, "%s/interrupted-shadow-old", tu_scratch_dir());
+    snprintf(args, sizeof args, "rm -rf '%s' && cp -R '%s' '%s'", old, dir, old);
+    ck_assert_int_eq(system(args), 0);
+    snprintf(args, sizeof args, "%s/drape.h5", old);
+    hid_t f = H5Fopen(args, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert(f >= 0);
+    ck_assert(H5Adelete_by_name(f, "run", "seed", H5P_DEFAULT) >= 0);
+    H5Fclose(f);
+    for (int pass = 0; pass < 2; pass++) {
+        const char *d = pass ? old : dir;
+        snprintf(args, sizeof args, "run -q --resume '%s'", d);
+        code = tu_run_drape(args, out, CAP, err, CAP);
+        ck_assert_msg(code == 0, "exit %d, stderr: %s", code, err);
+        ck_assert_msg(count_str(out, pass ? "\"seed\": null," : "\"seed\": 7,") == 2, "%s", out);
+        snprintf(svg, sizeof svg, "%s/shadow.svg", d);
+        FILE *fs = fopen(svg, "r");
+        ck_assert_msg(fs != NULL, "no %s", svg);
+        size_t n = fread(out, 1, CAP - 1, fs);
+        out[n] = 0;
+        fclose(fs);
+        ck_assert_int_eq(count_str(out, "<polygon class=\"shadow\""), 1);
+        ck_assert_msg(count_str(out, "data-seed=") == (pass ? 0 : 1) &&
+                          (pass || count_str(out, "data-seed=\"7\"") == 1),
+                      "pass %d: %.200s", pass, strstr(out, "<polygon class=\"shadow\""));
+    }
+}
+END_TEST
+
 /* --resume refuses what it cannot continue, with the documented statuses. */
 START_TEST(test_resume_refusals)
 {
@@ -1000,5 +1042,9 @@ Suite *run_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_resume_counts_steps_once);
     suite_add_tcase(s, tc);
+    TCase *sh = tcase_create("seed_shadow"); /* a resumed run's shadow.svg */
+    tcase_set_timeout(sh, 120);
+    tcase_add_test(sh, test_resume_seed_shadow);
+    suite_add_tcase(s, sh);
     return s;
 }

@@ -165,6 +165,8 @@ typedef struct drape_svg_specimen {
     const double *r;    /* borrowed; NULL when failed */
     int n;
     double node_threshold_m; /* prominence of a node (drape_shadow) */
+    int seed_unknown;   /* 1: seed not known (a run resumed from a checkpoint
+                           that did not store it): no data-seed */
 } drape_svg_specimen;
 
 /* What the picture shows besides the outlines. */
@@ -184,7 +186,8 @@ typedef struct drape_svg_scene {
 
 /* Write the top view as SVG 1.1 to f: the specimen's outline at rest
  * (dashed), the support disk or table top (grey), each specimen's shadow
- * as one <polygon class="shadow"> (data-seed, data-dc, data-nodes), its
+ * as one <polygon class="shadow"> (data-seed unless seed_unknown,
+ * data-dc, data-nodes), its
  * nodes as small circles, and a legend with the mean DC +- its 95 %
  * half-width and the node histogram.  Returns 0, or -1 when f reports a
  * write error. */
