@@ -11,7 +11,6 @@
  *     kept through off-grid output points, the command line's keys;
  *   - a step retried after a failed attempt is the step a fresh attempt
  *     from the same state computes (cholmod_l_solve2 interposed). */
-#define _GNU_SOURCE /* dlsym(RTLD_NEXT): the failed solves of test_retry_rolls_back */
 #include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>

@@ -12,7 +12,6 @@
  *     balance (|f_i| small against the particle's weight m_i g);
  *   - memory refusal: 2 * dim^2 * 8 bytes computed by hand.
  */
-#define _GNU_SOURCE /* dlsym(RTLD_NEXT): the restart failure of test_auto_failed_switch */
 #include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
