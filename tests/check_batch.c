@@ -587,26 +587,16 @@ START_TEST(test_sigint_keeps_finished_rows)
     /* -j 1 over three fabrics of ~0.5 s each; interrupt during the first:
      * it finishes and is written, no other starts, exit status 130 */
     const char *dir = subdir("sigint");
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
     char e_path[1024];
     snprintf(e_path, sizeof e_path, "%s/sigint.stderr", tu_scratch_dir());
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGINT, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
-        execl(bin, "drape", "batch", "-q", SCENE, COTTON, DENIM, "../fabrics/cotton-breen-kes.yaml",
-              "--spacing", "5cm", "--t-max", "0.3s", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
+    const char *const a[] = {"batch", "-q", SCENE, COTTON, DENIM,
+                             "../fabrics/cotton-breen-kes.yaml", "--spacing", "5cm", "--t-max",
+                             "0.3s", "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, e_path, 0);
     char first[1024];
     snprintf(first, sizeof first, "%s/logs/cotton-breen.stderr", dir);
-    struct timespec ts = {0, 5 * 1000 * 1000};
-    for (int i = 0; i < 4000 && access(first, F_OK) != 0; i++) nanosleep(&ts, NULL);
-    ck_assert_msg(access(first, F_OK) == 0, "the first run did not start");
-    kill(pid, SIGINT);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    ck_assert_msg(tu_wait_file(pid, first, 20.0) == 0, "the first run did not start");
+    int ws = tu_signal_and_reap(pid, SIGINT, 0);
     ck_assert(WIFEXITED(ws));
     ck_assert_int_eq(WEXITSTATUS(ws), 130);
     table *t = malloc(sizeof *t);
@@ -718,23 +708,14 @@ END_TEST
 START_TEST(test_killed_batch_stops_runs)
 {
     const char *dir = subdir("killed");
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
     char first[1024], log[1024], cmd[2400];
     snprintf(first, sizeof first, "%s/frames/cotton-breen/frame_000001.obj", dir);
     snprintf(log, sizeof log, "%s/logs/cotton-breen.csv", dir);
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "batch", "-q", SCENE, COTTON, "--spacing", "5cm", "--t-max", "600s",
-              "--frames", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 20000 && access(first, F_OK) != 0; i++) nanosleep(&ts, NULL);
-    ck_assert_msg(access(first, F_OK) == 0, "the run did not start");
-    kill(pid, SIGKILL);
-    ck_assert_int_eq(waitpid(pid, NULL, 0), pid);
+    const char *const a[] = {"batch", "-q", SCENE, COTTON, "--spacing", "5cm", "--t-max",
+                             "600s", "--frames", "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_msg(tu_wait_file(pid, first, 20.0) == 0, "the run did not start");
+    tu_signal_and_reap(pid, SIGKILL, 0);
     int stopped = 0;
     for (int i = 0; i < 200 && !stopped; i++) { /* 10 s */
         snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
@@ -761,32 +742,18 @@ END_TEST
 START_TEST(test_resume_ensemble_row)
 {
     const char *dir = subdir("ens-row");
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
     char wait_for[1024], cmd[2400], f0[1024];
     snprintf(wait_for, sizeof wait_for, "%s/frames/cotton-breen/specimen-001/frame_000002.obj",
              dir);
     snprintf(f0, sizeof f0, "%s/frames/cotton-breen/specimen-001/frame_000000.obj", dir);
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     ck_assert_int_eq(system(cmd), 0);
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "batch", "-q", "../scenes/cusick.yaml", COTTON, "--spacing", "5cm",
-              "--method", "dynamic", "--specimens", "2", "--frames", "--out", dir,
-              (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
-        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("the batch ended before %s", wait_for);
-        nanosleep(&ts, NULL);
-    }
-    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
-    kill(pid, SIGTERM);
-    ck_assert_int_eq(waitpid(pid, NULL, 0), pid);
+    const char *const a[] = {"batch", "-q", "../scenes/cusick.yaml", COTTON, "--spacing", "5cm",
+                             "--method", "dynamic", "--specimens", "2", "--frames", "--out",
+                             dir, NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_file_appears(pid, wait_for, 30.0);
+    tu_signal_and_reap(pid, SIGTERM, 0);
     table *t = malloc(sizeof *t);
     ck_assert_ptr_nonnull(t);
     load_table(dir, t);
@@ -819,7 +786,6 @@ END_TEST
 START_TEST(test_resume_swapped_names)
 {
     const char *dir = subdir("swapped");
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
     char d1[1024], d2[1024], cmd[8192], f1[1100], f2[1100], w1[1200], w2[1200];
     snprintf(d1, sizeof d1, "%s/d1", tu_scratch_dir());
     snprintf(d2, sizeof d2, "%s/d2", tu_scratch_dir());
@@ -830,22 +796,12 @@ START_TEST(test_resume_swapped_names)
     ck_assert_int_eq(system(cmd), 0);
     snprintf(w1, sizeof w1, "%s/frames/a/frame_000001.obj", dir);
     snprintf(w2, sizeof w2, "%s/frames/a-2/frame_000001.obj", dir);
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "batch", "-q", SCENE, f1, f2, "--spacing", "5cm", "--t-max", "0.3s",
-              "-j", "2", "--frames", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 20000 && (access(w1, F_OK) != 0 || access(w2, F_OK) != 0); i++)
-        nanosleep(&ts, NULL);
-    ck_assert_msg(access(w1, F_OK) == 0 && access(w2, F_OK) == 0, "the runs did not start");
-    kill(pid, SIGTERM);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    const char *const a[] = {"batch", "-q", SCENE, f1, f2, "--spacing", "5cm", "--t-max",
+                             "0.3s", "-j", "2", "--frames", "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_msg(tu_wait_file(pid, w1, 20.0) == 0 && tu_wait_file(pid, w2, 20.0) == 0,
+                  "the runs did not start");
+    int ws = tu_signal_and_reap(pid, SIGTERM, 0);
     ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 143, "status %d", ws);
     clear_logs(dir);
     snprintf(cmd, sizeof cmd, "batch -q %s %s %s --spacing 5cm --t-max 0.3s -j 2 --frames "
@@ -868,24 +824,13 @@ END_TEST
 START_TEST(test_interrupted_row_resumed)
 {
     const char *dir = subdir("interrupted");
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
     char first[1024], args[2048];
     snprintf(first, sizeof first, "%s/frames/cotton-breen/frame_000000.obj", dir);
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "batch", "-q", SCENE, COTTON, "--spacing", "5cm", "--t-max", "0.3s",
-              "--frames", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 20000 && access(first, F_OK) != 0; i++) nanosleep(&ts, NULL);
-    ck_assert_msg(access(first, F_OK) == 0, "the run did not start");
-    kill(pid, SIGTERM);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    const char *const a[] = {"batch", "-q", SCENE, COTTON, "--spacing", "5cm", "--t-max", "0.3s",
+                             "--frames", "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_msg(tu_wait_file(pid, first, 20.0) == 0, "the run did not start");
+    int ws = tu_signal_and_reap(pid, SIGTERM, 0);
     ck_assert(WIFEXITED(ws));
     ck_assert_int_eq(WEXITSTATUS(ws), 143);
     table *t = malloc(sizeof *t);

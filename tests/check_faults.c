@@ -31,8 +31,7 @@ static const char *hang = "run ../scenes/hang.yaml --spacing 5cm --t-max 0.2s -q
 static const char *drape_bin(void)
 {
     static char bin[1024];
-    const char *b = getenv("DRAPE_BIN");
-    if (!b) b = "../drape";
+    const char *b = tu_drape_bin();
     if (b[0] == '/') return b;
     char cwd[512];
     ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));

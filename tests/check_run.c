@@ -289,66 +289,25 @@ static const char *ir_scene(void)
     return tu_write_file("interrupt.yaml", text);
 }
 
-static const char *drape_bin(void)
-{
-    const char *b = getenv("DRAPE_BIN");
-    return b ? b : "../drape";
-}
-
-/* Start `drape ARGS...` (NULL-terminated), wait until `wait_for` exists,
- * send sig, and return the exit status (-1 if it did not exit).  stdout
- * goes to out (CAP), stderr to err. */
-/* Runs drape with args, sends sig once the file wait_for exists (or, with
- * wait_for NULL, after one second), and returns the exit status; out and
- * err get its stdout and stderr. */
 /* 1: run_and_signal starts drape in a process group of its own and
  * signals the whole group, as a terminal's Ctrl-C or `timeout` do */
 static int signal_group;
 
+/* Runs `drape ARGS...` (NULL-terminated), sends sig once the file
+ * wait_for exists (or, with wait_for NULL, after one second), and returns
+ * the exit status (-1 if it did not exit); out and err (CAP) get its
+ * stdout and stderr. */
 static int run_and_signal(const char *wait_for, int sig, const char *const *args)
 {
     char o_path[600], e_path[600];
     snprintf(o_path, sizeof o_path, "%s/sig.stdout", tu_scratch_dir());
     snprintf(e_path, sizeof e_path, "%s/sig.stderr", tu_scratch_dir());
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        if (signal_group) setpgid(0, 0);
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen(o_path, "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
-        const char *av[32];
-        int k = 0;
-        av[k++] = "drape";
-        for (; args[k - 1] && k < 31; k++) av[k] = args[k - 1];
-        av[k] = NULL;
-        execv(drape_bin(), (char *const *)av);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    if (!wait_for) {
-        for (int i = 0; i < 1000; i++) {
-            if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended within 1 s");
-            nanosleep(&ts, NULL);
-        }
-    }
-    for (int i = 0; wait_for && i < 30000 && access(wait_for, F_OK) != 0; i++) {
-        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", wait_for);
-        nanosleep(&ts, NULL);
-    }
-    ck_assert_msg(!wait_for || access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
-    if (signal_group) setpgid(pid, pid); /* either side may run first */
-    kill(signal_group ? -pid : pid, sig);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
-    FILE *f = fopen(o_path, "r");
-    size_t n = f ? fread(out, 1, CAP - 1, f) : 0;
-    out[n] = 0;
-    if (f) fclose(f);
-    f = fopen(e_path, "r");
-    n = f ? fread(err, 1, CAP - 1, f) : 0;
-    err[n] = 0;
-    if (f) fclose(f);
+    pid_t pid = tu_spawn_drape(args, o_path, e_path, signal_group);
+    if (wait_for) ck_assert_file_appears(pid, wait_for, 30.0);
+    else ck_assert_msg(tu_wait_file(pid, NULL, 1.0) == 0, "drape ended within 1 s");
+    int ws = tu_signal_and_reap(pid, sig, signal_group);
+    tu_read_file(o_path, out, CAP);
+    tu_read_file(e_path, err, CAP);
     return WIFEXITED(ws) ? WEXITSTATUS(ws) : -1;
 }
 
@@ -567,6 +526,24 @@ START_TEST(test_interrupt_ensemble_group)
 }
 END_TEST
 
+/* The links of test_out_no_symlink: at dir/NAME.PID.tmp of the process
+ * that calls link_tmp_names (drape, once it execs), each to victim. */
+typedef struct symlink_at {
+    const char *dir, *victim;
+} symlink_at;
+
+static int link_tmp_names(void *arg)
+{
+    const symlink_at *s = arg;
+    static const char *const names[] = {"frame_000000.obj", "drape.h5", "drape.xmf"};
+    char l[800];
+    for (int k = 0; k < 3; k++) {
+        snprintf(l, sizeof l, "%s/%s.%ld.tmp", s->dir, names[k], (long)getpid());
+        if (symlink(s->victim, l) != 0) return -1;
+    }
+    return 0;
+}
+
 /* A symbolic link at the name of a frame's or drape.h5's temporary file
  * (NAME.PID.tmp: predictable) is not written through: the file it points
  * to stays as it was, and the outputs are regular files. */
@@ -578,22 +555,11 @@ START_TEST(test_out_no_symlink)
     snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s' && echo keep > '%s'", dir, dir,
              victim);
     ck_assert_int_eq(system(cmd), 0);
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) { /* the links at this process's names, then drape in it */
-        char l[800];
-        static const char *const names[] = {"frame_000000.obj", "drape.h5", "drape.xmf"};
-        for (int k = 0; k < 3; k++) {
-            snprintf(l, sizeof l, "%s/%s.%ld.tmp", dir, names[k], (long)getpid());
-            if (symlink(victim, l) != 0) _exit(97);
-        }
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(drape_bin(), "drape", "run", "-q", "../scenes/hang.yaml", "--spacing", "5cm",
-              "--t-max", "0.05s", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    const char *const a[] = {"run", "-q", "../scenes/hang.yaml", "--spacing", "5cm",
+                             "--t-max", "0.05s", "--out", dir, NULL};
+    symlink_at links = {dir, victim};
+    pid_t pid = tu_spawn_drape_hook(a, NULL, NULL, 0, link_tmp_names, &links);
+    int ws = tu_signal_and_reap(pid, 0, 0);
     ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "status %d", ws);
     snprintf(cmd, sizeof cmd, "test \"$(cat '%s')\" = keep && test -f '%s/drape.h5' && "
              "test ! -L '%s/drape.h5' && test ! -L '%s/frame_000000.obj' && "

@@ -68,6 +68,17 @@ static ino_t inode(const char *dir, const char *name)
     return st.st_ino;
 }
 
+/* Start `drape run` of a dynamic ensemble of 2 cusick specimens at 5 cm,
+ * jobs (-j) at a time, into dir (see tu_spawn_drape for the rest). */
+static pid_t start_dynamic(const char *dir, const char *jobs, const char *out_path,
+                           const char *err_path, int new_group)
+{
+    const char *const a[] = {"run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm",
+                             "--method", "dynamic", "--specimens", "2", "-j", jobs,
+                             "--out", dir, NULL};
+    return tu_spawn_drape(a, out_path, err_path, new_group);
+}
+
 /* The resumed result is the uninterrupted one: every key but the times
  * (wall_s, cpu_s) the same text, each specimen's seed, status, dc, nodes
  * and radii too. */
@@ -263,34 +274,11 @@ START_TEST(test_resume_dynamic_interrupted)
     char o_path[600], e_path[600];
     snprintf(o_path, sizeof o_path, "%s/sig.stdout", tu_scratch_dir());
     snprintf(e_path, sizeof e_path, "%s/sig.stderr", tu_scratch_dir());
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen(o_path, "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
-        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
-              "dynamic", "--specimens", "2", "-j", "1", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
-        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", wait_for);
-        nanosleep(&ts, NULL);
-    }
-    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
-    kill(pid, SIGTERM);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
-    FILE *f = fopen(o_path, "r");
-    size_t n = f ? fread(out, 1, CAP - 1, f) : 0;
-    out[n] = 0;
-    if (f) fclose(f);
-    f = fopen(e_path, "r");
-    n = f ? fread(err, 1, CAP - 1, f) : 0;
-    err[n] = 0;
-    if (f) fclose(f);
+    pid_t pid = start_dynamic(dir, "1", o_path, e_path, 0);
+    ck_assert_file_appears(pid, wait_for, 30.0);
+    int ws = tu_signal_and_reap(pid, SIGTERM, 0);
+    tu_read_file(o_path, out, CAP);
+    tu_read_file(e_path, err, CAP);
     ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 143, "status %d, %s", ws, err);
     ck_assert_msg(strstr(out, "\"status\": \"interrupted\""), "%s", out);
     char hint[800];
@@ -376,31 +364,13 @@ START_TEST(test_resume_killed_cpu)
     char dir[600], wait_for[700], args[1400];
     snprintf(dir, sizeof dir, "%s/ens-killed", tu_scratch_dir());
     snprintf(wait_for, sizeof wait_for, "%s/specimen-001/frame_000002.obj", dir);
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        setpgid(0, 0); /* its specimens with it, to wait for them */
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
-              "dynamic", "--specimens", "2", "-j", "2", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    setpgid(pid, pid);
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
-        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", wait_for);
-        nanosleep(&ts, NULL);
-    }
-    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
+    /* in a group of its own: its specimens with it, to wait for them */
+    pid_t pid = start_dynamic(dir, "2", NULL, NULL, 1);
+    ck_assert_file_appears(pid, wait_for, 30.0);
     /* (a little CPU time in both specimens) */
-    struct timespec more = {0, 300 * 1000 * 1000};
+    struct timespec more = {0, 300 * 1000 * 1000}, ts = {0, 1000 * 1000};
     nanosleep(&more, NULL);
-    kill(pid, SIGKILL);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    tu_signal_and_reap(pid, SIGKILL, 0);
     for (int i = 0; i < 30000 && kill(-pid, 0) == 0; i++) nanosleep(&ts, NULL);
     ck_assert_msg(kill(-pid, 0) != 0, "the specimens did not stop with the ensemble");
     sh("grep -q '\"status\":\"running\"' %s/ensemble.json && test -f %s/specimen-001/drape.h5 && "
@@ -428,23 +398,8 @@ START_TEST(test_dir_in_use)
     snprintf(dir, sizeof dir, "%s/ens-in-use", tu_scratch_dir());
     snprintf(wait_for, sizeof wait_for, "%s/specimen-001/frame_000002.obj", dir);
     sh("rm -rf %s", dir);
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
-              "dynamic", "--specimens", "2", "-j", "1", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 30000 && access(wait_for, F_OK) != 0; i++) {
-        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", wait_for);
-        nanosleep(&ts, NULL);
-    }
-    ck_assert_msg(access(wait_for, F_OK) == 0, "%s never appeared", wait_for);
+    pid_t pid = start_dynamic(dir, "1", NULL, NULL, 0);
+    ck_assert_file_appears(pid, wait_for, 30.0);
     snprintf(args, sizeof args, "run -q --resume %s", dir);
     int st1 = tu_run_drape(args, out, CAP, err, CAP);
     int in_use1 = strstr(err, "another drape run is writing") != NULL;
@@ -452,9 +407,8 @@ START_TEST(test_dir_in_use)
              "--specimens 1 --out %s", dir);
     int st2 = tu_run_drape(args, out, CAP, err, CAP);
     int in_use2 = strstr(err, "another drape run is writing") != NULL;
-    int running = waitpid(pid, NULL, WNOHANG) == 0;
-    kill(pid, SIGTERM);
-    waitpid(pid, NULL, 0);
+    int running = !tu_child_ended(pid);
+    tu_signal_and_reap(pid, SIGTERM, 0);
     ck_assert_msg(running, "the first run ended before the second ones were tried");
     ck_assert_msg(st1 == 3 && in_use1 && out[0] == 0, "--resume: exit %d", st1);
     ck_assert_msg(st2 == 3 && in_use2 && out[0] == 0, "second run: exit %d, %s", st2, err);
@@ -646,17 +600,9 @@ START_TEST(test_signal_after_last_specimen)
     snprintf(o_path, sizeof o_path, "%s/late.stdout", tu_scratch_dir());
     snprintf(e_path, sizeof e_path, "%s/late.stderr", tu_scratch_dir());
     sh("rm -rf %s", dir);
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen(o_path, "w", stdout) || !freopen(e_path, "w", stderr)) _exit(99);
-        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "3cm",
-              "--specimens", "2", "-j", "2", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
+    const char *const a[] = {"run", "-q", "../scenes/cusick.yaml", "--spacing", "3cm",
+                             "--specimens", "2", "-j", "2", "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, o_path, e_path, 0);
     /* stopped where every specimen not stored yet is running (or done) */
     struct timespec ts = {0, 200 * 1000};
     int ws, zombies = 0, ready = 0;
@@ -680,17 +626,10 @@ START_TEST(test_signal_after_last_specimen)
         nc = children_of(pid, &zombies);
     }
     ck_assert_msg(zombies == nc, "%d of %d specimens ended", zombies, nc);
-    kill(pid, SIGTERM);
-    kill(pid, SIGCONT);
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
-    FILE *f = fopen(o_path, "r");
-    size_t n = f ? fread(out, 1, CAP - 1, f) : 0;
-    out[n] = 0;
-    if (f) fclose(f);
-    f = fopen(e_path, "r");
-    n = f ? fread(err, 1, CAP - 1, f) : 0;
-    err[n] = 0;
-    if (f) fclose(f);
+    kill(pid, SIGTERM); /* pending while it is stopped */
+    ws = tu_signal_and_reap(pid, SIGCONT, 0);
+    tu_read_file(o_path, out, CAP);
+    tu_read_file(e_path, err, CAP);
     ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "status %d, %s", ws, err);
     ck_assert_msg(!strstr(err, "interrupted"), "%s", err);
     json_object *g = parse(out), *sp;
@@ -764,26 +703,10 @@ START_TEST(test_resume_checkpoint_seed)
     snprintf(w1, sizeof w1, "%s/specimen-001/frame_000001.obj", dir);
     snprintf(w2, sizeof w2, "%s/specimen-002/frame_000001.obj", dir);
     sh("rm -rf %s", dir);
-    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
-    pid_t pid = fork();
-    ck_assert(pid >= 0);
-    if (pid == 0) {
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(99);
-        execl(bin, "drape", "run", "-q", "../scenes/cusick.yaml", "--spacing", "5cm", "--method",
-              "dynamic", "--specimens", "2", "-j", "2", "--out", dir, (char *)NULL);
-        _exit(98);
-    }
-    struct timespec ts = {0, 1000 * 1000};
-    for (int i = 0; i < 30000 && (access(w1, F_OK) != 0 || access(w2, F_OK) != 0); i++) {
-        if (waitpid(pid, NULL, WNOHANG) == pid) ck_abort_msg("drape ended before %s", w2);
-        nanosleep(&ts, NULL);
-    }
-    ck_assert_msg(access(w1, F_OK) == 0 && access(w2, F_OK) == 0, "no frames 1");
-    kill(pid, SIGTERM);
-    int ws;
-    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    pid_t pid = start_dynamic(dir, "2", NULL, NULL, 0);
+    ck_assert_file_appears(pid, w1, 30.0);
+    ck_assert_file_appears(pid, w2, 30.0);
+    int ws = tu_signal_and_reap(pid, SIGTERM, 0);
     ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 143, "status %d", ws);
     /* specimen 1's checkpoint says seed 5; specimen 2's has none */
     snprintf(h5, sizeof h5, "%s/specimen-001/drape.h5", dir);
