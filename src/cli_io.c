@@ -22,6 +22,8 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <float.h>
+#include <fnmatch.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -387,21 +389,40 @@ int drape_cli_lock_dir(const char *dir, int *held, drape_error *err)
     return 0;
 }
 
-int drape_cli_remove_stale_tmp(const char *dir, const char *name)
+/* 1 if s is a temporary name of form: NAME, then ".tmp.PID" or
+ * ".PID.tmp", with NAME matching the pattern name and PID digits. */
+static int is_stale_tmp(const char *s, const char *name, drape_cli_tmp_form form)
+{
+    char stem[NAME_MAX + 1];
+    size_t len = strlen(s);
+    if (len > NAME_MAX) return 0;
+    memcpy(stem, s, len + 1);
+    if (form == DRAPE_CLI_TMP_PID_FIRST) { /* NAME.PID.tmp */
+        if (len < 4 || strcmp(stem + len - 4, ".tmp") != 0) return 0;
+        stem[len -= 4] = 0;
+    }
+    char *dot = strrchr(stem, '.'), *pid = dot ? dot + 1 : NULL;
+    if (!pid || !*pid || strspn(pid, "0123456789") != strlen(pid)) return 0;
+    *dot = 0;
+    if (form == DRAPE_CLI_TMP_PID_LAST) { /* NAME.tmp.PID */
+        size_t n = strlen(stem);
+        if (n < 4 || strcmp(stem + n - 4, ".tmp") != 0) return 0;
+        stem[n - 4] = 0;
+    }
+    return fnmatch(name, stem, 0) == 0;
+}
+
+int drape_cli_remove_stale_tmp(const char *dir, const char *name, drape_cli_tmp_form form)
 {
     DIR *d = opendir(dir);
     if (!d) return 0;
-    size_t nl = strlen(name);
     int n = 0;
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
-        const char *s = e->d_name, *pid = s + nl + 5;
-        if (strncmp(s, name, nl) != 0 || strncmp(s + nl, ".tmp.", 5) != 0 || !*pid ||
-            strspn(pid, "0123456789") != strlen(pid))
-            continue;
+        if (!is_stale_tmp(e->d_name, name, form)) continue;
         char path[4400];
         struct stat st;
-        snprintf(path, sizeof path, "%s/%s", dir, s);
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
         if (lstat(path, &st) == 0 && !S_ISDIR(st.st_mode) && unlink(path) == 0) n++;
     }
     closedir(d);

@@ -35,11 +35,17 @@ int drape_cli_ensure_dir(const char *dir, int *created, drape_error *err);
  * *held = 1 when this process now holds DIR, 0 when it goes unguarded.
  * 0, or -1 and err. */
 int drape_cli_lock_dir(const char *dir, int *held, drape_error *err);
-/* Remove the temporaries DIR/NAME.tmp.<digits> of NAME (drape_cli_afile's,
- * left by a process killed outright while it wrote NAME), and no other
- * file.  Only for a DIR this process holds (drape_cli_lock_dir): no live
- * writer's temporary is then there.  Returns how many were removed. */
-int drape_cli_remove_stale_tmp(const char *dir, const char *name);
+/* Where a temporary's name has its writer's PID: NAME.tmp.PID
+ * (drape_cli_afile's: ensemble.json, shadow.svg, shadow.png, result.txt)
+ * or NAME.PID.tmp (output.h's: frame_NNNNNN.obj, drape.h5, drape.xmf). */
+typedef enum { DRAPE_CLI_TMP_PID_LAST, DRAPE_CLI_TMP_PID_FIRST } drape_cli_tmp_form;
+/* Remove the temporaries of NAME in DIR, named as form says with digits
+ * for the PID (left by a process killed outright while it wrote NAME),
+ * and no other file.  NAME is an fnmatch(3) pattern (frame_[0-9]...
+ * for every frame).  Only for a DIR this process holds
+ * (drape_cli_lock_dir): no live writer's temporary is then there.
+ * Returns how many were removed. */
+int drape_cli_remove_stale_tmp(const char *dir, const char *name, drape_cli_tmp_form form);
 /* DIR/NAME can be replaced by a file at the end of a run: it does not
  * exist or is not a directory.  0, or -1 with an E_IO error. */
 int drape_cli_check_target(const char *dir, const char *name, drape_error *err);

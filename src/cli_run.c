@@ -235,6 +235,14 @@ static void fabric_warn(void *ctx, const drape_error *w)
     drape_cli_warn(NULL, w);
 }
 
+void drape_cli_run_remove_stale(const char *dir)
+{
+    drape_cli_remove_stale_tmp(dir, "frame_[0-9][0-9][0-9][0-9][0-9][0-9].obj",
+                               DRAPE_CLI_TMP_PID_FIRST);
+    drape_cli_remove_stale_tmp(dir, "drape.h5", DRAPE_CLI_TMP_PID_FIRST);
+    drape_cli_remove_stale_tmp(dir, "drape.xmf", DRAPE_CLI_TMP_PID_FIRST);
+}
+
 /* ---- methods ----------------------------------------------------------------- */
 
 /* The fall method's numbers (time 0: the static method). */
@@ -492,8 +500,15 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     }
     if (out_dir) {
         if (drape_cli_ensure_dir(out_dir, &created_dir, &err) != 0) goto fail;
-        /* one writer at a time (a specimen's directory is its ensemble's) */
-        if (!child && !ra->check_only && drape_cli_lock_dir(out_dir, NULL, &err) != 0) goto fail;
+        /* one writer at a time (a specimen's directory is its ensemble's);
+         * held, DIR has no live writer: a killed run's temporaries go */
+        int held = 0;
+        if (!child && !ra->check_only && drape_cli_lock_dir(out_dir, &held, &err) != 0) goto fail;
+        if (held) {
+            drape_cli_run_remove_stale(out_dir);
+            drape_cli_remove_stale_tmp(out_dir, "shadow.svg", DRAPE_CLI_TMP_PID_LAST);
+            drape_cli_remove_stale_tmp(out_dir, "shadow.png", DRAPE_CLI_TMP_PID_LAST);
+        }
         /* a single run in an ensemble's directory: DIR is this run's now
          * (its shadow.svg replaces the ensemble's), and --resume DIR is
          * its (docs/outputs.md) */
@@ -501,6 +516,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
             char man[4200];
             snprintf(man, sizeof man, "%s/" DRAPE_ENSEMBLE_MANIFEST, out_dir);
             unlink(man);
+            if (held)
+                drape_cli_remove_stale_tmp(out_dir, DRAPE_ENSEMBLE_MANIFEST,
+                                           DRAPE_CLI_TMP_PID_LAST);
         }
         if (!child && (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE) &&
             (drape_cli_check_target(out_dir, "shadow.svg", &err) != 0 ||

@@ -85,6 +85,12 @@ typedef struct run_child {
     FILE *out;
 } run_child;
 
+/* Remove the temporaries of a run's files in DIR (output.h's NAME.PID.tmp
+ * of frame_NNNNNN.obj, drape.h5 and drape.xmf) that a run killed outright
+ * (SIGKILL) left, and no other file.  Only for a DIR this process holds
+ * (drape_cli_lock_dir, drape_cli_remove_stale_tmp). */
+void drape_cli_run_remove_stale(const char *dir);
+
 /* One specimen: load, build, run, measure, write frames, print the result
  * (child NULL) or send it to the parent.  Returns the exit status.  With
  * a->check_only: load, check and build only (the error printed, nothing

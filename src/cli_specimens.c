@@ -497,13 +497,13 @@ static int read_back(const ens_record *m, child *ch, int n)
  * is held (no other drape writes there then). */
 static void remove_stale(const char *dir, int n)
 {
-    drape_cli_remove_stale_tmp(dir, DRAPE_ENSEMBLE_MANIFEST);
-    drape_cli_remove_stale_tmp(dir, "shadow.svg");
-    drape_cli_remove_stale_tmp(dir, "shadow.png");
+    drape_cli_remove_stale_tmp(dir, DRAPE_ENSEMBLE_MANIFEST, DRAPE_CLI_TMP_PID_LAST);
+    drape_cli_remove_stale_tmp(dir, "shadow.svg", DRAPE_CLI_TMP_PID_LAST);
+    drape_cli_remove_stale_tmp(dir, "shadow.png", DRAPE_CLI_TMP_PID_LAST);
     for (int k = 0; k < n; k++) {
         char sd[4200];
         snprintf(sd, sizeof sd, "%s/specimen-%03d", dir, k + 1);
-        drape_cli_remove_stale_tmp(sd, ENS_RESULT);
+        drape_cli_remove_stale_tmp(sd, ENS_RESULT, DRAPE_CLI_TMP_PID_LAST);
     }
 }
 
