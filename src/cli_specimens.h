@@ -71,7 +71,9 @@ char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, do
 void drape_cli_ens_result_remove(const ens_record *m, int k);
 /* 1 if DIR/specimen-NNN/drape.h5 is the checkpoint of this ensemble's
  * specimen k, interrupted (*cpu_s: its CPU time so far, 0 if not
- * stored); 0 otherwise. */
+ * stored); 0 otherwise, with a warning naming the file when it is this
+ * ensemble's but of another seed or its cpu_s is not a CPU time (text,
+ * inf, nan or negative): the specimen then runs from the start. */
 int drape_cli_ens_checkpoint(const ens_record *m, int k, double *cpu_s);
 
 /* The ensemble of a (cli_specimens.c).  m: its manifest when resumed

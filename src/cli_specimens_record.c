@@ -293,7 +293,19 @@ int drape_cli_ens_checkpoint(const ens_record *m, int k, double *cpu_s)
                         want);
             ok = 0;
         }
-        if (ok && cpu && !cpu->text && cpu->value >= 0) *cpu_s = cpu->value;
+        /* its CPU time so far, if stored, must be one (an inf made the
+         * ensemble's cpu_s inf, and ensemble.json invalid JSON) */
+        if (ok && cpu && (cpu->text || !isfinite(cpu->value) || !(cpu->value >= 0))) {
+            if (cpu->text)
+                fprintf(stderr, "drape: %s: warning: the checkpoint's cpu_s is not a number; "
+                        "the specimen runs again from the start\n", path);
+            else
+                fprintf(stderr, "drape: %s: warning: the checkpoint's cpu_s is %.17g, not a "
+                        "CPU time (a finite number of seconds, >= 0); the specimen runs "
+                        "again from the start\n", path, cpu->value);
+            ok = 0;
+        }
+        if (ok && cpu) *cpu_s = cpu->value;
     }
     drape_h5_checkpoint_free(&c);
     return ok;

@@ -756,6 +756,86 @@ START_TEST(test_resume_checkpoint_seed)
 }
 END_TEST
 
+/* Replace attribute name of group grp in the HDF5 file path by a double
+ * (v) or a string (text, when not NULL). */
+static void h5_set_attr(const char *path, const char *grp, const char *name, double v,
+                        const char *text)
+{
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert_msg(f >= 0, "cannot open %s", path);
+    /* deleted and created anew (HDF5 1.10 cannot write an attribute
+     * opened in dense storage) */
+    ck_assert(H5Adelete_by_name(f, grp, name, H5P_DEFAULT) >= 0);
+    hid_t sp = H5Screate(H5S_SCALAR), t = H5Tcopy(text ? H5T_C_S1 : H5T_IEEE_F64LE);
+    if (text) ck_assert(H5Tset_size(t, H5T_VARIABLE) >= 0);
+    hid_t a = H5Acreate_by_name(f, grp, name, t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ck_assert(a >= 0);
+    if (text)
+        ck_assert(H5Awrite(a, t, &text) >= 0);
+    else
+        ck_assert(H5Awrite(a, H5T_NATIVE_DOUBLE, &v) >= 0);
+    H5Aclose(a);
+    H5Tclose(t);
+    H5Sclose(sp);
+    H5Fclose(f);
+}
+
+/* A dynamic specimen's checkpoint was continued by --resume whatever CPU
+ * time it stored: inf made the ensemble's cpu_s inf (null in the result,
+ * inf in ensemble.json, which was then not JSON), nan, a negative one or
+ * a text were taken silently.  Now such a checkpoint is damaged: a
+ * warning names it, and the specimen runs again from the start (its
+ * frame 0 written anew).  The ensemble is interrupted by SIGTERM from a
+ * shell once each of its 4 specimens wrote frame 1. */
+START_TEST(test_resume_checkpoint_cpu)
+{
+    static const double bad[] = {INFINITY, NAN, -1.0, 0.0};
+    static const char *const shown[] = {"inf", "nan", "-1", NULL};
+    const char *bin = getenv("DRAPE_BIN") ? getenv("DRAPE_BIN") : "../drape";
+    char dir[600], args[1400], h5[700], want[900], fr[64];
+    snprintf(dir, sizeof dir, "%s/ens-ck-cpu", tu_scratch_dir());
+    sh("rm -rf '%s'; '%s' run -q ../scenes/cusick.yaml --spacing 5cm --method dynamic "
+       "--specimens 4 -j 4 --out '%s' >/dev/null 2>&1 & p=$!; i=0; "
+       "while [ $i -lt 3000 ] && { [ ! -e '%s/specimen-001/frame_000001.obj' ] || "
+       "[ ! -e '%s/specimen-002/frame_000001.obj' ] || "
+       "[ ! -e '%s/specimen-003/frame_000001.obj' ] || "
+       "[ ! -e '%s/specimen-004/frame_000001.obj' ]; }; do sleep 0.01; i=$((i+1)); done; "
+       "kill -TERM $p; wait $p; test $? = 143",
+       dir, bin, dir, dir, dir, dir, dir);
+    ino_t frame0[4];
+    for (int k = 0; k < 4; k++) {
+        snprintf(h5, sizeof h5, "%s/specimen-%03d/drape.h5", dir, k + 1);
+        h5_set_attr(h5, "stats", "cpu_s", bad[k], k == 3 ? "12" : NULL);
+        snprintf(fr, sizeof fr, "specimen-%03d/frame_000000.obj", k + 1);
+        frame0[k] = inode(dir, fr);
+    }
+    snprintf(args, sizeof args, "run -q --resume '%s' -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    for (int k = 0; k < 4; k++) {
+        if (shown[k])
+            snprintf(want, sizeof want, "drape: %s/specimen-%03d/drape.h5: warning: the "
+                     "checkpoint's cpu_s is %s, not a CPU time", dir, k + 1, shown[k]);
+        else
+            snprintf(want, sizeof want, "drape: %s/specimen-%03d/drape.h5: warning: the "
+                     "checkpoint's cpu_s is not a number", dir, k + 1);
+        ck_assert_msg(strstr(err, want), "want '%s' in: %s", want, err);
+        snprintf(fr, sizeof fr, "specimen-%03d/frame_000000.obj", k + 1);
+        ck_assert_msg(inode(dir, fr) != frame0[k], "specimen %d continued", k + 1);
+    }
+    json_object *g = parse(out);
+    ck_assert_str_eq(jstr(g, "status"), "equilibrium");
+    double cpu = jnum(g, "cpu_s");
+    ck_assert_msg(isfinite(cpu) && cpu > 0, "cpu_s %.17g", cpu);
+    json_object_put(g);
+    snprintf(h5, sizeof h5, "%s/ensemble.json", dir);
+    g = json_object_from_file(h5);
+    ck_assert_msg(g != NULL, "%s is not JSON", h5);
+    cpu = jnum(g, "cpu_s");
+    ck_assert_msg(isfinite(cpu) && cpu > 0, "ensemble.json cpu_s %.17g", cpu);
+    json_object_put(g);
+}
+END_TEST
+
 Suite *specimens_resume_suite(void)
 {
     Suite *s = suite_create("specimens_resume");
@@ -780,5 +860,9 @@ Suite *specimens_resume_suite(void)
     tcase_set_timeout(seed, 120);
     tcase_add_test(seed, test_resume_checkpoint_seed);
     suite_add_tcase(s, seed);
+    TCase *ck_cpu = tcase_create("checkpoint_cpu"); /* the checkpoints' CPU times */
+    tcase_set_timeout(ck_cpu, 120);
+    tcase_add_test(ck_cpu, test_resume_checkpoint_cpu);
+    suite_add_tcase(s, ck_cpu);
     return s;
 }
