@@ -65,7 +65,9 @@ int drape_cli_ens_result_store(const ens_record *m, int k, int exit_status, doub
                                const char *text, size_t len, drape_error *err);
 /* The stored text of specimen k (caller frees with drape_free), its exit
  * status and CPU time; NULL when there is none of this ensemble (none,
- * another ensemble's, another seed, unreadable). */
+ * another ensemble's, another seed, unreadable).  A warning on stderr
+ * names the file when it is this ensemble's but not usable: @seed not
+ * the manifest's seed + k (both seeds given), @exit or @cpu_s damaged. */
 char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, double *cpu_s);
 /* Remove specimen k's stored result (a new ensemble in DIR). */
 void drape_cli_ens_result_remove(const ens_record *m, int k);

@@ -225,12 +225,17 @@ char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, do
     }
     char *p = text, *id = at_line(&p, "ensemble"), *seed = id ? at_line(&p, "seed") : NULL;
     char *ex = seed ? at_line(&p, "exit") : NULL, *cpu = ex ? at_line(&p, "cpu_s") : NULL;
-    char *end = NULL;
-    unsigned long sd = seed ? strtoul(seed, &end, 10) : 0;
-    if (!cpu || strcmp(id, m->id) != 0 || *end ||
-        sd != m->seed0 + (unsigned long)k) {
+    if (!cpu || strcmp(id, m->id) != 0) {
         drape_free(text);
         return NULL; /* another ensemble's, or not one at all: run it */
+    }
+    /* this ensemble's, of another specimen's seed (moved or edited) */
+    unsigned long want = m->seed0 + (unsigned long)k;
+    if (!*seed || strspn(seed, "0123456789") != strlen(seed) || strtoul(seed, NULL, 10) != want) {
+        fprintf(stderr, "drape: %s: warning: @seed is %s, not this specimen's %lu; the specimen "
+                "runs again\n", path, seed, want);
+        drape_free(text);
+        return NULL;
     }
     /* this ensemble's specimen: its exit status and CPU time must be ones
      * (a damaged @cpu_s 1e999 made the ensemble's cpu_s inf, and

@@ -516,6 +516,40 @@ START_TEST(test_resume_damaged_header)
 }
 END_TEST
 
+/* A stored result.txt of this ensemble whose @seed is not its specimen's
+ * (the manifest's seed + k: here 5 in specimen 1 of seeds 1-3, or x in
+ * specimen 2) was discarded and the specimen run again silently.  Now a
+ * warning names the file and both seeds; one of another ensemble (its
+ * @ensemble changed, specimen 3) is still run again without one.  The
+ * result is the uninterrupted one, and the seeds that ran are stored. */
+START_TEST(test_resume_result_seed)
+{
+    char dir[600], args[1400], ref[CAP];
+    snprintf(dir, sizeof dir, "%s/ens-seed", tu_scratch_dir());
+    fall3(dir, ref);
+    sh("cd %s && sed -i 's/^@seed\t.*/@seed\t5/' specimen-001/result.txt && "
+       "sed -i 's/^@seed\t.*/@seed\tx/' specimen-002/result.txt && "
+       "sed -i 's/^@ensemble\t.*/@ensemble\tanother/' specimen-003/result.txt && "
+       "grep -q '^@seed\t5$' specimen-001/result.txt && grep -q '^@seed\tx$' "
+       "specimen-002/result.txt && grep -q '^@ensemble\tanother$' specimen-003/result.txt",
+       dir);
+    ino_t old3 = inode(dir, "specimen-003/result.txt");
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    assert_rerun_warning(dir, 1, "@seed is 5, not this specimen's 1; the specimen runs again");
+    assert_rerun_warning(dir, 2, "@seed is x, not this specimen's 2; the specimen runs again");
+    ck_assert_msg(!strstr(err, "specimen-003"), "%s", err);
+    ck_assert(inode(dir, "specimen-003/result.txt") != old3);
+    json_object *r = parse(ref), *g = parse(out);
+    assert_same_ensemble(r, g);
+    json_object_put(g);
+    json_object_put(r);
+    sh("cd %s && grep -q '^@seed\t1$' specimen-001/result.txt && "
+       "grep -q '^@seed\t2$' specimen-002/result.txt && "
+       "! grep -q '^@ensemble\tanother$' specimen-003/result.txt", dir);
+}
+END_TEST
+
 /* A stored number that is not one: dc `x` was read as 0 (strtod without
  * its end), and the ensemble's mean DC was two thirds of the true one;
  * r_min_m `0.25x` (a number and more), nodes `1e999` (an overflow).
@@ -855,6 +889,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(quick, test_resume_result_numbers);
     tcase_add_test(quick, test_signal_after_last_specimen);
     tcase_add_test(quick, test_resume_stale_tmp);
+    tcase_add_test(quick, test_resume_result_seed);
     suite_add_tcase(s, quick);
     TCase *seed = tcase_create("seed"); /* the checkpoints' seeds */
     tcase_set_timeout(seed, 120);
