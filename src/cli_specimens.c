@@ -492,9 +492,10 @@ static int read_back(const ens_record *m, child *ch, int n)
     return n_stored;
 }
 
-/* The temporaries of DIR's files and of specimens 1..n's result.txt that
- * a part killed outright left (NAME.tmp.PID, cli_io.h): removed once DIR
- * is held (no other drape writes there then). */
+/* The temporaries of DIR's files and of specimens 1..n's result.txt
+ * (NAME.tmp.PID, cli_io.h), frames, drape.h5 and drape.xmf (NAME.PID.tmp,
+ * drape_cli_run_remove_stale) that a part killed outright left: removed
+ * once DIR is held (no other drape writes there then). */
 static void remove_stale(const char *dir, int n)
 {
     drape_cli_remove_stale_tmp(dir, DRAPE_ENSEMBLE_MANIFEST, DRAPE_CLI_TMP_PID_LAST);
@@ -504,6 +505,7 @@ static void remove_stale(const char *dir, int n)
         char sd[4200];
         snprintf(sd, sizeof sd, "%s/specimen-%03d", dir, k + 1);
         drape_cli_remove_stale_tmp(sd, ENS_RESULT, DRAPE_CLI_TMP_PID_LAST);
+        drape_cli_run_remove_stale(sd);
     }
 }
 

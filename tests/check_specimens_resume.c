@@ -724,6 +724,41 @@ START_TEST(test_resume_stale_tmp)
 }
 END_TEST
 
+/* The frames', drape.h5's and drape.xmf's temporaries (NAME.PID.tmp)
+ * that a specimen killed outright left in its directory stayed there
+ * through every --resume; the ensemble now removes them with the
+ * others once it holds DIR, and keeps the look-alikes. */
+START_TEST(test_resume_stale_specimen_tmp)
+{
+    static const char *const stale[] = {
+        "specimen-001/frame_000002.obj.4242.tmp", "specimen-002/drape.h5.77.tmp",
+        "specimen-003/drape.xmf.987654321.tmp", NULL};
+    static const char *const kept[] = {
+        "specimen-001/frame_000002.obj.tmp.4242", "specimen-002/drape.h5.77x.tmp",
+        "specimen-003/frame_2.obj.5.tmp", "drape.h5.77.tmp.old", NULL};
+    char dir[600], args[1400], ref[CAP], p[900];
+    snprintf(dir, sizeof dir, "%s/ens-stale-specimen", tu_scratch_dir());
+    fall3(dir, ref);
+    for (int i = 0; stale[i]; i++) sh("echo stale > %s/%s", dir, stale[i]);
+    for (int i = 0; kept[i]; i++) sh("echo kept > %s/%s", dir, kept[i]);
+    sh("rm %s/specimen-002/result.txt", dir);
+    snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    json_object *g = parse(out), *r = parse(ref);
+    assert_same_ensemble(r, g);
+    json_object_put(g);
+    json_object_put(r);
+    for (int i = 0; stale[i]; i++) {
+        snprintf(p, sizeof p, "%s/%s", dir, stale[i]);
+        ck_assert_msg(access(p, F_OK) != 0, "%s is still there", p);
+    }
+    for (int i = 0; kept[i]; i++) {
+        snprintf(p, sizeof p, "%s/%s", dir, kept[i]);
+        ck_assert_msg(access(p, F_OK) == 0, "%s was removed", p);
+    }
+}
+END_TEST
+
 /* A dynamic specimen's checkpoint was continued by --resume whatever seed
  * it stored: one whose seed is not the manifest's seed + k (here 5 for
  * specimen 1 of seeds 1, 2; or none stored, for specimen 2) was taken as
@@ -890,6 +925,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(quick, test_signal_after_last_specimen);
     tcase_add_test(quick, test_resume_stale_tmp);
     tcase_add_test(quick, test_resume_result_seed);
+    tcase_add_test(quick, test_resume_stale_specimen_tmp);
     suite_add_tcase(s, quick);
     TCase *seed = tcase_create("seed"); /* the checkpoints' seeds */
     tcase_set_timeout(seed, 120);
