@@ -231,9 +231,12 @@ char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, do
     }
     /* this ensemble's, of another specimen's seed (moved or edited) */
     unsigned long want = m->seed0 + (unsigned long)k;
-    if (!*seed || strspn(seed, "0123456789") != strlen(seed) || strtoul(seed, NULL, 10) != want) {
-        fprintf(stderr, "drape: %s: warning: @seed is %s, not this specimen's %lu; the specimen "
-                "runs again\n", path, seed, want);
+    int digits = *seed && strspn(seed, "0123456789") == strlen(seed);
+    if (!digits || strtoul(seed, NULL, 10) != want) {
+        /* the stored text is shown only when it is a number: a damaged
+         * file's control characters do not reach the terminal */
+        fprintf(stderr, "drape: %s: warning: @seed is %.40s, not this specimen's %lu; the "
+                "specimen runs again\n", path, digits ? seed : "not a whole number", want);
         drape_free(text);
         return NULL;
     }

@@ -528,16 +528,18 @@ START_TEST(test_resume_result_seed)
     snprintf(dir, sizeof dir, "%s/ens-seed", tu_scratch_dir());
     fall3(dir, ref);
     sh("cd %s && sed -i 's/^@seed\t.*/@seed\t5/' specimen-001/result.txt && "
-       "sed -i 's/^@seed\t.*/@seed\tx/' specimen-002/result.txt && "
+       "sed -i 's/^@seed\t.*/@seed\tx\x1b[2J/' specimen-002/result.txt && "
        "sed -i 's/^@ensemble\t.*/@ensemble\tanother/' specimen-003/result.txt && "
-       "grep -q '^@seed\t5$' specimen-001/result.txt && grep -q '^@seed\tx$' "
+       "grep -q '^@seed\t5$' specimen-001/result.txt && grep -q '^@seed\tx.\\[2J$' "
        "specimen-002/result.txt && grep -q '^@ensemble\tanother$' specimen-003/result.txt",
        dir);
     ino_t old3 = inode(dir, "specimen-003/result.txt");
     snprintf(args, sizeof args, "run -q --resume %s -j 2", dir);
     ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
     assert_rerun_warning(dir, 1, "@seed is 5, not this specimen's 1; the specimen runs again");
-    assert_rerun_warning(dir, 2, "@seed is x, not this specimen's 2; the specimen runs again");
+    assert_rerun_warning(dir, 2, "@seed is not a whole number, not this specimen's 2; the "
+                                 "specimen runs again");
+    ck_assert_msg(!strchr(err, '\x1b'), "the file's escape reached stderr: %s", err);
     ck_assert_msg(!strstr(err, "specimen-003"), "%s", err);
     ck_assert(inode(dir, "specimen-003/result.txt") != old3);
     json_object *r = parse(ref), *g = parse(out);
