@@ -206,6 +206,13 @@ static char *at_line(char **p, const char *name)
     return v;
 }
 
+/* A stored time (CPU or wall) that can be added up: finite and >= 0 (an inf made
+ * the ensemble's cpu_s inf, and ensemble.json invalid JSON). */
+static int is_seconds(double v)
+{
+    return isfinite(v) && v >= 0;
+}
+
 char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, double *cpu_s)
 {
     char path[4300];
@@ -243,15 +250,13 @@ char *drape_cli_ens_result_load(const ens_record *m, int k, int *exit_status, do
     /* this ensemble's specimen: its exit status and CPU time must be ones
      * (a damaged @cpu_s 1e999 made the ensemble's cpu_s inf, and
      * ensemble.json invalid JSON) */
-    const char *e1, *e2;
+    const char *e1, *e2, *bad = NULL;
     double xv, cv;
-    const char *bad = drape_cli_result_parse_num(ex, &e1, &xv) != 0 || *e1 || xv != floor(xv) ||
-                              !(xv >= 0 && xv <= 255)
-                          ? "@exit is not an exit status (an integer from 0 to 255)"
-                      : drape_cli_result_parse_num(cpu, &e2, &cv) != 0 || *e2 || !isfinite(cv) ||
-                              !(cv >= 0)
-                          ? "@cpu_s is not a CPU time (a finite number of seconds, >= 0)"
-                          : NULL;
+    if (drape_cli_result_parse_num(ex, &e1, &xv) != 0 || *e1 || xv != floor(xv) ||
+        !(xv >= 0 && xv <= 255))
+        bad = "@exit is not an exit status (an integer from 0 to 255)";
+    else if (drape_cli_result_parse_num(cpu, &e2, &cv) != 0 || *e2 || !is_seconds(cv))
+        bad = "@cpu_s is not a CPU time (a finite number of seconds, >= 0)";
     if (bad) {
         fprintf(stderr, "drape: %s: warning: %s; the specimen runs again\n", path, bad);
         drape_free(text);
@@ -303,7 +308,7 @@ int drape_cli_ens_checkpoint(const ens_record *m, int k, double *cpu_s)
         }
         /* its CPU time so far, if stored, must be one (an inf made the
          * ensemble's cpu_s inf, and ensemble.json invalid JSON) */
-        if (ok && cpu && (cpu->text || !isfinite(cpu->value) || !(cpu->value >= 0))) {
+        if (ok && cpu && (cpu->text || !is_seconds(cpu->value))) {
             if (cpu->text)
                 fprintf(stderr, "drape: %s: warning: the checkpoint's cpu_s is not a number; "
                         "the specimen runs again from the start\n", path);
@@ -407,8 +412,8 @@ static int read_manifest(const char *dir, ens_record *m, run_args *ra, drape_err
     m->seed0 = (unsigned long)sv;
     m->cpu_s = json_object_get_double(cpu);
     m->wall_s = json_object_get_double(wall);
-    if (!(m->cpu_s >= 0) || !isfinite(m->cpu_s)) m->cpu_s = 0;
-    if (!(m->wall_s >= 0) || !isfinite(m->wall_s)) m->wall_s = 0;
+    if (!is_seconds(m->cpu_s)) m->cpu_s = 0;
+    if (!is_seconds(m->wall_s)) m->wall_s = 0;
     m->resuming = 1;
     /* the options, set as the command line set them */
     drape_cli_run_args_init(ra);
