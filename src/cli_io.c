@@ -596,6 +596,29 @@ struct json_object *drape_cli_read_json_in_range(const char *path, size_t max, d
     return read_json(path, max, 1, err);
 }
 
+/* json-c ends a // comment at LF only, so in a file whose lines end in CR
+ * alone (old Mac) a comment ran to the end of the file ("unexpected end of
+ * file").  A lone CR that ends a // comment outside strings becomes LF:
+ * one byte for one, so every offset stays, and line_col counts both as
+ * one break. */
+static void comments_end_at_lf(char *t, size_t n)
+{
+    size_t i = 0;
+    while (i < n) {
+        if (t[i] == '"' || t[i] == '\'') {
+            i = json_string_end(t, i, n) + 1;
+        } else if (t[i] == '/' && i + 1 < n && t[i + 1] == '*') {
+            const char *e = strstr(t + i + 2, "*/");
+            i = e ? (size_t)(e - t) + 2 : n;
+        } else if (t[i] == '/' && i + 1 < n && t[i + 1] == '/') {
+            while (i < n && t[i] != '\n' && t[i] != '\r') i++;
+            if (i < n && line_ends_at(t, i, n)) t[i] = '\n';
+        } else {
+            i++;
+        }
+    }
+}
+
 static struct json_object *read_json(const char *path, size_t max, int in_range, drape_error *err)
 {
     size_t len;
@@ -606,6 +629,7 @@ static struct json_object *read_json(const char *path, size_t max, int in_range,
         drape_error_set(err, DRAPE_E_SYNTAX, path, 0, 0, NULL, "NUL byte: not a JSON text file");
         goto out;
     }
+    comments_end_at_lf(text, len);
     json_tokener *tok = json_tokener_new_ex(32);
     if (!tok) {
         drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");

@@ -295,18 +295,25 @@ END_TEST
 /* The lines of an error's file:line:column count LF, CR LF and CR alone
  * (old Mac files) each as one break: the same file in the three forms
  * gives the same place, counted by hand (a CR LF file does not count
- * twice, a CR file does not stay on line 1). */
+ * twice, a CR file does not stay on line 1, a // comment does not run on
+ * to the end of a CR file). */
 START_TEST(test_arcsim_line_endings)
 {
     static const char *const eol[3] = {"\n", "\r\n", "\r"};
     static const char *const syntax[] = {"{", "  \"density\": 0.1,", "  \"stretching\": [",
                                          "    [1, 2, 3, 4],", "    [1, 2, }", NULL};
     static const char *const after[] = {"{\"density\": 0.1}", "", "  x", NULL};
+    /* a // comment ends at the line's end in all three forms (json-c ends
+     * it at LF only: with CR alone it ran to the end of the file) */
+    static const char *const comment[] = {"{", "  // ARCSim allows comments", "  \"density\": 0.1,",
+                                          "  \"stretching\": [", "    [1, 2, 3, 4],",
+                                          "    [1, 2, }", NULL};
     static const struct {
         const char *const *lines, *expect;
     } cases[] = {
         {syntax, "le.json:5:12: not valid JSON"}, /* the '}' in place of a number */
         {after, "le.json:3:3: text after the end of the JSON object"},
+        {comment, "le.json:6:12: not valid JSON"},
     };
     const char *dir = subdir("arcsim-eol");
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++)
