@@ -769,6 +769,23 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
             drape_cli_warn(NULL, &w);
         }
     }
+    /* a rest state that the certification calls a saddle: stationary but
+     * not stable, so no physical drape stays there; kept (the result says
+     * "certified": "saddle", exit 0 as before), and said, by every
+     * specimen of an ensemble that ends there.  On a scene with
+     * a zero mode (a cloth hung from one pin) the label is roundoff's:
+     * docs/equilibrium.md, "Zero modes" */
+    if (method_static && have_state && res.status == DRAPE_SIM_EQUILIBRIUM && er.certified == 0) {
+        drape_error w;
+        drape_error_clear(&w);
+        drape_error_set(&w, DRAPE_E_NUMERIC, NULL, 0, 0, NULL,
+                        "the rest state found is a saddle point, not a stable drape "
+                        "(\"certified\": \"saddle\": its Hessian is not positive definite); a "
+                        "real cloth would not stay there, unless the scene has a free rigid "
+                        "motion, where the label is roundoff's (docs/equilibrium.md, "
+                        "\"Zero modes\"); hint: --method dynamic");
+        drape_cli_warn(NULL, &w);
+    }
     drape_cli_result_num(&r, "fall_fold_time_s", fp.fold_time > 0.0 ? fp.fold_time : NAN);
     drape_cli_result_num(&r, "fall_fold_step_s", fp.fold_time > 0.0 ? fp.fold_step : NAN);
     drape_cli_result_num(&r, "fall_retry_s", fp.retry > 0.0 ? fp.retry : NAN);
