@@ -499,7 +499,7 @@ static int parse_solver(const drape_yread *c, const drape_ynode *root, drape_sce
     snprintf(s->integrator, sizeof s->integrator, "%s", "auto");
     s->rtol = SCENE_RTOL;
     s->atol = SCENE_ATOL;
-    s->fall_swing = -1.0; /* DRAPE_FALL_SWING */
+    s->fall_swing = -1.0; /* the scene's default: drape_scene_fall_swing */
     s->fall_fold_time = -1.0; /* DRAPE_FALL_FOLD_TIME of the fall time */
     if (!m) return 0;
     if (drape_yread_want_map(c, m, "solver") ||

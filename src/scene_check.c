@@ -225,7 +225,8 @@ void drape_scene_fall_fold(const drape_scene *s, double time_s, double step_s,
 
 double drape_scene_fall_swing(const drape_scene *s)
 {
-    return s->fall_swing >= 0.0 ? s->fall_swing : DRAPE_FALL_SWING;
+    if (s->fall_swing >= 0.0) return s->fall_swing;
+    return s->kind == DRAPE_SCENE_TABLE ? DRAPE_FALL_SWING_TABLE : DRAPE_FALL_SWING;
 }
 
 double drape_scene_animate_step(const drape_scene *s, double *frame_s, int *substeps)

@@ -1092,6 +1092,17 @@ START_TEST(test_fall_params)
     ck_assert_int_eq(load_text("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                                "solver: {fall_fold_time: 0.1 s}\nend: {t_max: 5 s}\n", &s, &e), 0);
     ck_assert_double_eq_tol(s.fall_fold_time, 0.1, 1e-15);
+    /* the swing past the fall time: on by default, off on the table
+     * (DRAPE_FALL_SWING_TABLE), the scene's own value either way */
+    load_example("scenes/cusick.yaml", &s);
+    ck_assert_double_eq(drape_scene_fall_swing(&s), 0.02);
+    ck_assert_int_eq(load_text("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                               "solver: {fall_swing: 0}\nend: {t_max: 5 s}\n", &s, &e), 0);
+    ck_assert_double_eq(drape_scene_fall_swing(&s), 0.0);
+    load_example("scenes/table.yaml", &s);
+    ck_assert_double_eq(drape_scene_fall_swing(&s), 0.0);
+    s.fall_swing = 0.05;
+    ck_assert_double_eq(drape_scene_fall_swing(&s), 0.05);
     load_example("scenes/table.yaml", &s);
     ck_assert_int_eq(s.specimens, 10);
     drape_scene_fall_params(&s, &t, &h);
