@@ -131,7 +131,7 @@ $(O)/tests/%.o: tests/%.c $(HEADERS) tests/testutil.h tests/elastica.h tests/fix
 # Two suites interpose a library function (a SUNDIALS restart, a CHOLMOD
 # solve) that they make fail and otherwise pass on with dlsym(RTLD_NEXT),
 # a GNU extension: only their objects see _GNU_SOURCE.
-$(O)/tests/check_integrator.o $(O)/tests/check_animate.o: TEST_FEATURES = -D_GNU_SOURCE
+$(O)/tests/check_integrator.o $(O)/tests/check_animate.o $(O)/tests/check_specimens_resume.o: TEST_FEATURES = -D_GNU_SOURCE
 
 # The runner learns the suites from the file names: tests/check_NOUN.c
 # exports `Suite *NOUN_suite(void)`.

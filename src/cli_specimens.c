@@ -578,6 +578,11 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
     ens_record own;
     memset(&own, 0, sizeof own);
     ens_record *m = rm;
+    /* the handlers of SIGINT and SIGTERM while the specimens run and the
+     * result is written (restored at the end: a signal while the summary
+     * is written is held, not a kill that leaves it half done) */
+    struct sigaction old_int, old_term;
+    int handlers_set = 0;
     child *ch = drape_calloc((size_t)n, sizeof *ch);
     drape_cli_specimen *spec = drape_calloc((size_t)n, sizeof *spec);
     drape_svg_specimen *sv = drape_calloc((size_t)n, sizeof *sv);
@@ -653,7 +658,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         if (drape_cli_ens_record_write(m, &err) != 0) goto fail;
     }
 
-    struct sigaction sa, old_int, old_term;
+    struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal;
     sigemptyset(&sa.sa_mask);
@@ -664,6 +669,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
     sigaction(SIGTERM, NULL, &old_term);
     if (old_int.sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
     if (old_term.sa_handler != SIG_IGN) sigaction(SIGTERM, &sa, NULL);
+    handlers_set = 1;
 
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
@@ -748,9 +754,19 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
     }
     if (progress) fputc('\n', stderr);
     clock_gettime(CLOCK_MONOTONIC, &t1);
-    sigaction(SIGINT, &old_int, NULL);
-    sigaction(SIGTERM, &old_term, NULL);
-    if (ens_stop < 0) goto fail;
+    /* what stopped the specimens, if anything: a signal from here on (while
+     * the result is written, the handlers still set) changes nothing */
+    const int stop_sig = (int)ens_stop;
+    /* and a write of the result that such a signal interrupts goes on
+     * (SA_RESTART: a blocked write to a full pipe returned EINTR, "cannot
+     * write the result"); the loop above wants EINTR, to pass a signal
+     * on to the specimens while it waits for them */
+    if (handlers_set) {
+        sa.sa_flags = SA_RESTART;
+        if (old_int.sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
+        if (old_term.sa_handler != SIG_IGN) sigaction(SIGTERM, &sa, NULL);
+    }
+    if (stop_sig < 0) goto fail;
 
     /* interrupted: a specimen is (not started, or stopped by the signal);
      * a signal that came after every specimen finished (before the last
@@ -763,7 +779,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         int ran = c->started || c->stored;
         p->seed = seed0 + (unsigned long)k;
         /* not started, or stopped by the signal before it reported */
-        const char *stx = !ran || (ens_stop > 0 && !c->have_res && c->exit_status >= 128)
+        const char *stx = !ran || (stop_sig > 0 && !c->have_res && c->exit_status >= 128)
                               ? "interrupted" : spec_status(c);
         snprintf(p->status, sizeof p->status, "%.15s", stx);
         int ok = ran && spec_ok(c);
@@ -844,7 +860,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
             drape_cli_print_error(&me);
     }
     if (interrupted) {
-        int sig = ens_stop > 0 ? (int)ens_stop : SIGINT;
+        int sig = stop_sig > 0 ? stop_sig : SIGINT;
         if (a->out_dir)
             fprintf(stderr, "drape: interrupted by %s with %d of %d specimens finished; "
                     "continue with `drape run --resume %s`\n",
@@ -873,6 +889,10 @@ fail:
     if (m && !resuming && n_kept == 0) unlink(m->path);
     if (created_dir) rmdir(a->out_dir); /* only if empty */
 out:
+    if (handlers_set) {
+        sigaction(SIGINT, &old_int, NULL);
+        sigaction(SIGTERM, &old_term, NULL);
+    }
     for (int k = 0; ch && k < n; k++) {
         if (ch[k].fd >= 0) close(ch[k].fd);
         drape_free(ch[k].buf);

@@ -7,12 +7,14 @@
  * ensemble, whose first specimen then continues from its checkpoint.
  * The resumed ensemble is compared with the uninterrupted one. */
 #include <dirent.h>
+#include <fcntl.h>
 #include <math.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -684,6 +686,61 @@ START_TEST(test_signal_after_last_specimen)
 }
 END_TEST
 
+/* A signal while the ensemble writes its result, after every specimen
+ * was collected: the handlers were restored before the summary, so a
+ * SIGTERM then killed drape with the result half printed and the
+ * manifest still "running".  Now the summary is written whole, exit 0.
+ * Made deterministic: stdout is a pipe of one page that is not read, so
+ * drape blocks in the middle of its result (32 specimens: about 6 kB);
+ * the signal is sent while it is blocked there, then the pipe is read. */
+START_TEST(test_signal_while_summary_written)
+{
+    char dir[600], o_path[64], e_path[600], man[700];
+    snprintf(dir, sizeof dir, "%s/ens-summary-signal", tu_scratch_dir());
+    snprintf(e_path, sizeof e_path, "%s/summary.stderr", tu_scratch_dir());
+    sh("rm -rf %s", dir);
+    int fd[2];
+    ck_assert_int_eq(pipe(fd), 0);
+    int cap = fcntl(fd[1], F_SETPIPE_SZ, 4096);
+    ck_assert_msg(cap >= 4096 && cap < 6000, "pipe of %d bytes", cap);
+    snprintf(o_path, sizeof o_path, "/proc/self/fd/%d", fd[1]);
+    const char *const a[] = {"run", "-q", "../scenes/cusick.yaml", "--spacing", "3cm",
+                             "--method", "static", "--specimens", "32", "-j", "2",
+                             "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, o_path, e_path, 0);
+    close(fd[1]);
+    /* the pipe full: drape is writing its result */
+    int avail = 0, ws;
+    struct timespec ms = {0, 1000 * 1000};
+    for (int i = 0; i < 120000 && avail < cap; i++) {
+        ck_assert_int_eq(ioctl(fd[0], FIONREAD, &avail), 0);
+        ck_assert_msg(waitpid(pid, &ws, WNOHANG) == 0, "drape ended with the pipe not full");
+        if (avail < cap) nanosleep(&ms, NULL);
+    }
+    ck_assert_msg(avail >= cap, "the pipe never filled (%d bytes)", avail);
+    ck_assert_int_eq(count_files("%s/specimen-%03d/result.txt", dir, 32), 32);
+    kill(pid, SIGTERM);
+    nanosleep(&ms, NULL);
+    size_t len = 0;
+    ssize_t got;
+    while ((got = read(fd[0], out + len, CAP - 1 - len)) > 0) len += (size_t)got;
+    out[len] = 0;
+    close(fd[0]);
+    ck_assert_int_eq(waitpid(pid, &ws, 0), pid);
+    tu_read_file(e_path, err, CAP);
+    ck_assert_msg(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "status %d, %s", ws, err);
+    json_object *g = parse(out);
+    ck_assert_str_eq(jstr(g, "status"), "equilibrium");
+    ck_assert_int_eq((int)jnum(g, "specimens_failed"), 0);
+    json_object_put(g);
+    snprintf(man, sizeof man, "%s/ensemble.json", dir);
+    json_object *m = json_object_from_file(man);
+    ck_assert_ptr_nonnull(m);
+    ck_assert_str_eq(jstr(m, "status"), "equilibrium");
+    json_object_put(m);
+}
+END_TEST
+
 /* Temporaries NAME.tmp.PID of ensemble.json, shadow.svg, shadow.png and
  * the specimens' result.txt, left by a part killed outright while it
  * wrote them, stayed in DIR forever.  Once it holds DIR, an ensemble (new
@@ -925,6 +982,7 @@ Suite *specimens_resume_suite(void)
     tcase_add_test(quick, test_resume_damaged_header);
     tcase_add_test(quick, test_resume_result_numbers);
     tcase_add_test(quick, test_signal_after_last_specimen);
+    tcase_add_test(quick, test_signal_while_summary_written);
     tcase_add_test(quick, test_resume_stale_tmp);
     tcase_add_test(quick, test_resume_result_seed);
     tcase_add_test(quick, test_resume_stale_specimen_tmp);
