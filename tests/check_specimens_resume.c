@@ -622,6 +622,17 @@ static int count_files(const char *fmt, const char *dir, int n)
     return c;
 }
 
+/* DIR/ensemble.json says status `want`. */
+static void assert_manifest_status(const char *dir, const char *want)
+{
+    char man[700];
+    snprintf(man, sizeof man, "%s/ensemble.json", dir);
+    json_object *m = json_object_from_file(man);
+    ck_assert_msg(m != NULL, "%s not readable", man);
+    ck_assert_str_eq(jstr(m, "status"), want);
+    json_object_put(m);
+}
+
 /* A signal that arrives after every specimen finished, before the
  * ensemble reaped the last one (or while it writes its result), marked
  * the whole ensemble interrupted (exit 143, status interrupted, the
@@ -633,7 +644,7 @@ static int count_files(const char *fmt, const char *dir, int n)
  * exit 0, the manifest says equilibrium. */
 START_TEST(test_signal_after_last_specimen)
 {
-    char dir[600], o_path[600], e_path[600], man[700];
+    char dir[600], o_path[600], e_path[600];
     snprintf(dir, sizeof dir, "%s/ens-late-signal", tu_scratch_dir());
     snprintf(o_path, sizeof o_path, "%s/late.stdout", tu_scratch_dir());
     snprintf(e_path, sizeof e_path, "%s/late.stderr", tu_scratch_dir());
@@ -677,11 +688,7 @@ START_TEST(test_signal_after_last_specimen)
     for (int k = 0; k < 2; k++)
         ck_assert_str_eq(jstr(json_object_array_get_idx(sp, (size_t)k), "status"), "equilibrium");
     json_object_put(g);
-    snprintf(man, sizeof man, "%s/ensemble.json", dir);
-    json_object *m = json_object_from_file(man);
-    ck_assert_ptr_nonnull(m);
-    ck_assert_str_eq(jstr(m, "status"), "equilibrium");
-    json_object_put(m);
+    assert_manifest_status(dir, "equilibrium");
     ck_assert_int_eq(count_files("%s/specimen-%03d/result.txt", dir, 2), 2);
 }
 END_TEST
@@ -695,7 +702,7 @@ END_TEST
  * the signal is sent while it is blocked there, then the pipe is read. */
 START_TEST(test_signal_while_summary_written)
 {
-    char dir[600], o_path[64], e_path[600], man[700];
+    char dir[600], o_path[64], e_path[600];
     snprintf(dir, sizeof dir, "%s/ens-summary-signal", tu_scratch_dir());
     snprintf(e_path, sizeof e_path, "%s/summary.stderr", tu_scratch_dir());
     sh("rm -rf %s", dir);
@@ -733,11 +740,7 @@ START_TEST(test_signal_while_summary_written)
     ck_assert_str_eq(jstr(g, "status"), "equilibrium");
     ck_assert_int_eq((int)jnum(g, "specimens_failed"), 0);
     json_object_put(g);
-    snprintf(man, sizeof man, "%s/ensemble.json", dir);
-    json_object *m = json_object_from_file(man);
-    ck_assert_ptr_nonnull(m);
-    ck_assert_str_eq(jstr(m, "status"), "equilibrium");
-    json_object_put(m);
+    assert_manifest_status(dir, "equilibrium");
 }
 END_TEST
 
