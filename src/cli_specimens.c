@@ -137,6 +137,20 @@ static void on_signal(int sig)
     ens_signals++;
 }
 
+/* on_signal for SIGINT and SIGTERM, with sa_flags flags, where the caller
+ * (old_int, old_term: their handlers before) did not ignore them */
+static void catch_ens_signals(const struct sigaction *old_int, const struct sigaction *old_term,
+                              int flags)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sa.sa_flags = flags;
+    sigemptyset(&sa.sa_mask);
+    if (old_int->sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
+    if (old_term->sa_handler != SIG_IGN) sigaction(SIGTERM, &sa, NULL);
+}
+
 /* Start specimen c->k (seed): a new run, or with from_ck the run
  * continued from its checkpoint in its directory.  id: the ensemble's
  * (with --out), stored in its checkpoint; quiet_all: no specimen prints
@@ -658,17 +672,13 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         if (drape_cli_ens_record_write(m, &err) != 0) goto fail;
     }
 
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
     ens_stop = 0;
     ens_signals = 0;
     const int hard_at = getenv("DRAPE_SIGNAL_FORWARDED") ? 3 : 2;
     sigaction(SIGINT, NULL, &old_int);
     sigaction(SIGTERM, NULL, &old_term);
-    if (old_int.sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
-    if (old_term.sa_handler != SIG_IGN) sigaction(SIGTERM, &sa, NULL);
+    /* no SA_RESTART: waitpid below returns EINTR, to pass a signal on */
+    catch_ens_signals(&old_int, &old_term, 0);
     handlers_set = 1;
 
     struct timespec t0, t1;
@@ -759,13 +769,8 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
     const int stop_sig = (int)ens_stop;
     /* and a write of the result that such a signal interrupts goes on
      * (SA_RESTART: a blocked write to a full pipe returned EINTR, "cannot
-     * write the result"); the loop above wants EINTR, to pass a signal
-     * on to the specimens while it waits for them */
-    if (handlers_set) {
-        sa.sa_flags = SA_RESTART;
-        if (old_int.sa_handler != SIG_IGN) sigaction(SIGINT, &sa, NULL);
-        if (old_term.sa_handler != SIG_IGN) sigaction(SIGTERM, &sa, NULL);
-    }
+     * write the result") */
+    catch_ens_signals(&old_int, &old_term, SA_RESTART);
     if (stop_sig < 0) goto fail;
 
     /* interrupted: a specimen is (not started, or stopped by the signal);
