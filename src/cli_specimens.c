@@ -508,13 +508,15 @@ static int read_back(const ens_record *m, child *ch, int n)
 
 /* The temporaries of DIR's files and of specimens 1..n's result.txt
  * (NAME.tmp.PID, cli_io.h), frames, drape.h5 and drape.xmf (NAME.PID.tmp,
- * drape_cli_run_remove_stale) that a part killed outright left: removed
+ * drape_cli_run_remove_stale) that a part killed outright left, in DIR
+ * (a single run killed there) and in the specimens' directories: removed
  * once DIR is held (no other drape writes there then). */
 static void remove_stale(const char *dir, int n)
 {
     drape_cli_remove_stale_tmp(dir, DRAPE_ENSEMBLE_MANIFEST, DRAPE_CLI_TMP_PID_LAST);
     drape_cli_remove_stale_tmp(dir, "shadow.svg", DRAPE_CLI_TMP_PID_LAST);
     drape_cli_remove_stale_tmp(dir, "shadow.png", DRAPE_CLI_TMP_PID_LAST);
+    drape_cli_run_remove_stale(dir);
     for (int k = 0; k < n; k++) {
         char sd[4200];
         snprintf(sd, sizeof sd, "%s/specimen-%03d", dir, k + 1);

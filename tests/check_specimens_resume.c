@@ -748,16 +748,21 @@ END_TEST
  * the specimens' result.txt, left by a part killed outright while it
  * wrote them, stayed in DIR forever.  Once it holds DIR, an ensemble (new
  * or resumed) removes exactly those (NAME.tmp. and digits), and nothing
- * else: not other names, nor other suffixes. */
+ * else: not other names, nor other suffixes.  So are the frames', drape.h5's
+ * and drape.xmf's (NAME.PID.tmp) that a single run killed in DIR left
+ * (before, an ensemble removed them only in its specimens' directories). */
 START_TEST(test_resume_stale_tmp)
 {
     static const char *const stale[] = {
         "ensemble.json.tmp.12345", "shadow.svg.tmp.1", "shadow.png.tmp.987654321",
-        "specimen-001/result.txt.tmp.4242", "specimen-003/result.txt.tmp.7", NULL};
+        "specimen-001/result.txt.tmp.4242", "specimen-003/result.txt.tmp.7",
+        /* a single run killed in DIR before the ensemble */
+        "frame_000002.obj.4242.tmp", "drape.h5.77.tmp", "drape.xmf.9.tmp", NULL};
     static const char *const kept[] = {
         "ensemble.json.tmp.", "ensemble.json.tmp.12a", "shadow.svg.tmp.5.bak", "shadow.svg.tmp-5",
         "xshadow.png.tmp.5", "notes.tmp.5", "specimen-001/result.txt.tmp.x1",
-        "specimen-002/frame.tmp.3", "specimen-001/result.txt.5.tmp", NULL};
+        "specimen-002/frame.tmp.3", "specimen-001/result.txt.5.tmp", "drape.h5.77x.tmp",
+        "frame_2.obj.5.tmp", NULL};
     char dir[600], args[1400], ref[CAP], p[900];
     snprintf(dir, sizeof dir, "%s/ens-stale", tu_scratch_dir());
     for (int pass = 0; pass < 2; pass++) { /* 0: --resume; 1: a new ensemble */
