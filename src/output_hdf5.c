@@ -80,6 +80,17 @@ static int h5_fail(const char *path, drape_error *err, const char *what)
                            msg[0] ? ": " : "", msg);
 }
 
+/* Close an HDF5 id on a failure path.  Every HDF5 call clears the error
+ * stack when it starts, so a plain close would lose the failure's message
+ * (a full disk's "No space left on device") before h5_fail reads it: the
+ * stack is set aside and put back around the close. */
+static void close_keep_error(herr_t (*close_id)(hid_t), hid_t id)
+{
+    hid_t es = H5Eget_current_stack();
+    (void)close_id(id);
+    if (es >= 0) H5Eset_current_stack(es);
+}
+
 /* ----------------------------------------------------------- helpers */
 
 static char *join(const char *dir, const char *base, const char *suffix)
@@ -102,12 +113,15 @@ static hid_t put_data(hid_t loc, const char *name, hid_t ftype, hid_t mtype, int
     hid_t sp = H5Screate_simple(rank, dims, NULL);
     if (sp < 0) return -1;
     hid_t ds = H5Dcreate2(loc, name, ftype, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (ds < 0) {
+        close_keep_error(H5Sclose, sp);
+        return -1;
+    }
     H5Sclose(sp);
-    if (ds < 0) return -1;
     hsize_t total = 1;
     for (int k = 0; k < rank; k++) total *= dims[k];
     if (total > 0 && H5Dwrite(ds, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
-        H5Dclose(ds);
+        close_keep_error(H5Dclose, ds);
         return -1;
     }
     return ds;
@@ -126,11 +140,16 @@ static int attr_double(hid_t loc, const char *name, double v)
     hid_t sp = H5Screate(H5S_SCALAR);
     if (sp < 0) return -1;
     hid_t a = H5Acreate2(loc, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0) {
+        close_keep_error(H5Sclose, sp);
+        return -1;
+    }
     H5Sclose(sp);
-    if (a < 0) return -1;
-    int rc = H5Awrite(a, H5T_NATIVE_DOUBLE, &v) < 0 ? -1 : 0;
-    if (H5Aclose(a) < 0) rc = -1;
-    return rc;
+    if (H5Awrite(a, H5T_NATIVE_DOUBLE, &v) < 0) {
+        close_keep_error(H5Aclose, a);
+        return -1;
+    }
+    return H5Aclose(a) < 0 ? -1 : 0;
 }
 
 /* Variable-length UTF-8 string attribute. */
@@ -148,8 +167,14 @@ static int attr_string(hid_t loc, const char *name, const char *text)
     if (H5Awrite(a, t, &text) < 0) goto out;
     rc = 0;
 out:
-    if (a >= 0 && H5Aclose(a) < 0) rc = -1;
-    if (sp >= 0) H5Sclose(sp);
+    if (rc < 0) { /* keep the failure's message for h5_fail */
+        if (a >= 0) close_keep_error(H5Aclose, a);
+        if (sp >= 0) close_keep_error(H5Sclose, sp);
+        close_keep_error(H5Tclose, t);
+        return rc;
+    }
+    if (H5Aclose(a) < 0) rc = -1;
+    H5Sclose(sp);
     H5Tclose(t);
     return rc;
 }
@@ -166,8 +191,11 @@ static int put_kv_group(hid_t loc, const char *name, const drape_kv *kv, int n)
         rc = kv[k].text ? attr_string(g, kv[k].key, kv[k].text)
                         : attr_double(g, kv[k].key, kv[k].value);
     }
-    H5Gclose(g);
-    return rc < 0 ? -1 : 0;
+    if (rc < 0) {
+        close_keep_error(H5Gclose, g);
+        return -1;
+    }
+    return H5Gclose(g) < 0 ? -1 : 0;
 }
 
 static int attr_units(hid_t loc, const char *units)
@@ -354,12 +382,18 @@ static int put_state(hid_t g, double t_s, const double *x, const double *v, int 
     hsize_t d3[2] = {(hsize_t)n, 3};
     hid_t ds = put_data(g, "positions", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d3, x);
     if (ds < 0) return -1;
-    int rc = (attr_double(ds, "time_s", t_s) < 0 || attr_units(ds, "m") < 0) ? -1 : 0;
-    if (H5Dclose(ds) < 0) rc = -1;
+    if (attr_double(ds, "time_s", t_s) < 0 || attr_units(ds, "m") < 0) {
+        close_keep_error(H5Dclose, ds);
+        return -1;
+    }
+    int rc = H5Dclose(ds) < 0 ? -1 : 0;
     if (rc == 0 && v) {
         ds = put_data(g, "velocities", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 2, d3, v);
         if (ds < 0) return -1;
-        if (attr_units(ds, "m/s") < 0) rc = -1;
+        if (attr_units(ds, "m/s") < 0) {
+            close_keep_error(H5Dclose, ds);
+            return -1;
+        }
         if (H5Dclose(ds) < 0) rc = -1;
     }
     if (rc == 0 && attr_double(g, "time_s", t_s) < 0) rc = -1;
@@ -391,7 +425,8 @@ int drape_h5_frame(drape_h5 *h, double t_s, const double *x, const double *v,
     hid_t g = H5Gcreate2(h->steps, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     if (g < 0) return h5_fail(h->path, err, "cannot create a frame group");
     int rc = put_state(g, t_s, x, v, n);
-    if (H5Gclose(g) < 0) rc = -1;
+    if (rc) close_keep_error(H5Gclose, g);
+    else if (H5Gclose(g) < 0) rc = -1;
     if (rc) {
         char what[64];
         snprintf(what, sizeof what, "cannot write /steps/%s", name);

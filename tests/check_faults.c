@@ -14,6 +14,7 @@
  * file at its first frame; before the fix in drape_h5_open (H5dont_atexit)
  * HDF5 1.10 crashed in its exit handler here (status 139). */
 #include <dirent.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -117,6 +118,29 @@ START_TEST(test_disk_full_while_writing_frames)
 }
 END_TEST
 
+/* A full disk met while drape.h5 takes a frame: the message says why
+ * (HDF5's innermost message, docs/outputs.md), as it does for an OBJ frame
+ * or for the file's closing.  Before the fix it read "HDF5: cannot write
+ * /steps/000005" and no more: the closes on the failure path (H5Dclose,
+ * H5Gclose) cleared HDF5's error stack before it was read.  Found by a
+ * review that filled a small tmpfs at every size. */
+START_TEST(test_disk_full_message_says_why)
+{
+    const char *dir = new_dir("full-why");
+    char args[1024];
+    snprintf(args, sizeof args, "%s --out '%s'", hang, dir);
+    /* the 16 KiB limit of test_disk_full_while_writing_frames: drape.h5
+     * fails at a frame, write() with EFBIG */
+    int st = run_with("ulimit -f 32; trap '' XFSZ; exec", args);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_msg(strstr(err, "/steps/") != NULL, "not failed at a frame: %s", err);
+    ck_assert_msg(strstr(err, strerror(EFBIG)) != NULL, "message without the reason: %s", err);
+    ck_assert_msg(strchr(err, '\n') == err + strlen(err) - 1, "message: %s", err);
+    ck_assert_int_eq(count_files(dir, "drape"), 0);
+    ck_assert_int_eq(count_files(dir, "frame_"), 0);
+}
+END_TEST
+
 /* An output directory that exists but cannot be written into: the error
  * comes before any computation, names the directory, and nothing stays.
  * Root ignores permission bits, so a read-only directory of sysfs is used
@@ -197,6 +221,7 @@ Suite *faults_suite(void)
     TCase *tc = tcase_create("faults");
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_disk_full_while_writing_frames);
+    tcase_add_test(tc, test_disk_full_message_says_why);
     tcase_add_test(tc, test_unwritable_output_dir);
     tcase_add_test(tc, test_stdout_full);
     tcase_add_test(tc, test_missing_fabric);
