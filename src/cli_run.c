@@ -883,7 +883,10 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     } else if (drape_cli_result_print_json(stdout, &r) != 0) {
         goto nomem;
     }
-    if (fflush(child ? child->out : stdout) != 0) {
+    /* ferror too: a write that failed inside fprintf (a result longer than
+     * the stream's buffer) left nothing for fflush to fail on */
+    FILE *res_out = child ? child->out : stdout;
+    if (fflush(res_out) != 0 || ferror(res_out)) {
         drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");
         goto fail;
     }

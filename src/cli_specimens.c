@@ -851,7 +851,9 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
         goto fail;
     }
-    if (fflush(stdout) != 0) {
+    /* ferror too: a write that failed inside fprintf (the specimens array
+     * passes the stream's buffer) left nothing for fflush to fail on */
+    if (fflush(stdout) != 0 || ferror(stdout)) {
         drape_error_set(&err, DRAPE_E_IO, "<stdout>", 0, 0, NULL, "cannot write the result");
         goto fail;
     }

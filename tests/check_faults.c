@@ -191,6 +191,29 @@ START_TEST(test_stdout_full)
 }
 END_TEST
 
+/* A result longer than stdout's buffer (4 KiB): an ensemble's JSON with
+ * its specimens array.  Its first write failed inside fprintf, which
+ * dropped the text; the fflush after it had nothing left to write and
+ * succeeded, so drape exited 0 with the result lost (the README's
+ * `--specimens 30` > file on a full disk).  Found by a review running
+ * ensembles > /dev/full. */
+START_TEST(test_stdout_full_long_result)
+{
+    const char *ens = "run ../scenes/hang.yaml --spacing 5cm --t-max 0.05s -q --method animate "
+                      "--specimens 40 -j 1";
+    int st = tu_run_drape(ens, out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "status %d: %s", st, err);
+    ck_assert_msg(strlen(out) > 4096, "result only %zu bytes", strlen(out));
+    st = run_with("sh -c 'exec \"$0\" \"$@\" >/dev/full'", ens);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_ptr_nonnull(strstr(err, "drape: <stdout>"));
+    char csv[512];
+    snprintf(csv, sizeof csv, "%s --format csv", ens);
+    st = run_with("sh -c 'exec \"$0\" \"$@\" >/dev/full'", csv);
+    ck_assert_msg(st == 3, "csv: status %d (want 3), stderr: %s", st, err);
+}
+END_TEST
+
 START_TEST(test_missing_fabric)
 {
     const char *p = tu_write_file("orphan.yaml",
@@ -224,6 +247,7 @@ Suite *faults_suite(void)
     tcase_add_test(tc, test_disk_full_message_says_why);
     tcase_add_test(tc, test_unwritable_output_dir);
     tcase_add_test(tc, test_stdout_full);
+    tcase_add_test(tc, test_stdout_full_long_result);
     tcase_add_test(tc, test_missing_fabric);
     suite_add_tcase(s, tc);
     return s;
