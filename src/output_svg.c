@@ -48,6 +48,13 @@ static void text_escaped(FILE *f, const char *s)
          * even as references */
         else if ((unsigned char)*s < 0x20 && *s != '\t' && *s != '\n' && *s != '\r')
             fputc(' ', f);
+        /* nor are the noncharacters U+FFFE, U+FFFF (EF BF BE, EF BF BF),
+         * which YAML's "\uFFFE" escape makes: shown as U+FFFD */
+        else if ((unsigned char)s[0] == 0xEF && (unsigned char)s[1] == 0xBF &&
+                 ((unsigned char)s[2] == 0xBE || (unsigned char)s[2] == 0xBF)) {
+            fputs("\xEF\xBF\xBD", f);
+            s += 2;
+        }
         else fputc(*s, f);
     }
 }

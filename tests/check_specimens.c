@@ -435,6 +435,48 @@ START_TEST(test_ensemble_texts)
 }
 END_TEST
 
+/* A fabric name with the noncharacters U+FFFE and U+FFFF, which YAML's
+ * "\uFFFE" escape makes and `drape check` accepts: they are not XML
+ * characters, so shadow.svg was not well-formed, librsvg refused it
+ * ("PCDATA invalid Char value 65534") and the ensemble failed with exit 3
+ * after all its specimens had run.  The legend shows U+FFFD for them;
+ * the JSON keeps the name as it is.  Found by a review trying unusual
+ * fabric names on the picture. */
+START_TEST(test_ensemble_text_noncharacter)
+{
+    FILE *fp = fopen("../fabrics/cotton-breen.yaml", "r");
+    ck_assert_ptr_nonnull(fp);
+    static char text[65536];
+    size_t len = 0;
+    char line[1024];
+    while (fgets(line, sizeof line, fp)) {
+        const char *l = strncmp(line, "fabric:", 7) == 0 ? "fabric: \"odd\\uFFFEname\\uFFFFend\"\n"
+                                                         : line;
+        ck_assert_uint_lt(len + strlen(l), sizeof text);
+        memcpy(text + len, l, strlen(l) + 1);
+        len += strlen(l);
+    }
+    fclose(fp);
+    char args[4096], dir[900], svg[1000];
+    snprintf(dir, sizeof dir, "%s/ens-nonchar-out", tu_scratch_dir());
+    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --fabric %s --spacing 3cm "
+             "--method static --specimens 2 -j 1 --out %s",
+             tu_write_file("ens-nonchar.yaml", text), dir);
+    int st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "exit %d, %s", st, err);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "%s", out);
+    json_object *f;
+    ck_assert(json_object_object_get_ex(o, "fabric", &f));
+    ck_assert_str_eq(json_object_get_string(f), "odd\xEF\xBF\xBEname\xEF\xBF\xBF" "end");
+    json_object_put(o);
+    snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
+    ck_assert_int_eq(xpath_count(svg, "//s:polygon[@class='shadow']"), 2);
+    ck_assert_int_eq(
+        xpath_count(svg, "//s:text[contains(., 'odd\xEF\xBF\xBDname\xEF\xBF\xBD" "end, cusick')]"), 1);
+}
+END_TEST
+
 /* The scene keys: specimens, solver.method and the fall's time and step. */
 START_TEST(test_scene_keys)
 {
@@ -977,6 +1019,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_ensemble_failures);
     tcase_add_test(tc, test_ensemble_input_errors);
     tcase_add_test(tc, test_ensemble_texts);
+    tcase_add_test(tc, test_ensemble_text_noncharacter);
     tcase_add_test(tc, test_scene_keys);
     tcase_add_test(tc, test_fall_tol_keys);
     tcase_add_test(tc, test_openmp_inline);
