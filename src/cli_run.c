@@ -837,7 +837,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         }
         drape_h5 *h = rc.h5;
         rc.h5 = NULL;
-        if (drape_h5_close(h, &fin, &err) != 0) goto fail;
+        if (drape_h5_finish(h, &fin, &err) != 0) goto fail;
+        rc.h5 = h; /* complete; put in place after the picture (below) */
     }
     /* a resumed run that finished: the checkpoint-only file has served */
     if (ri && !ri->had_h5 && !interrupted && !s.out_hdf5) {
@@ -855,6 +856,13 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         drape_svg_specimen sv = {one.seed, one.dc, one.nodes, sh.centre_m[0], sh.centre_m[1],
                                  rad, na, sh.node_threshold_m, one.seed_unknown};
         if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
+    }
+    /* drape.h5 and drape.xmf are renamed into place only now, so that a
+     * picture that cannot be written leaves neither (issue 7) */
+    if (rc.h5) {
+        drape_h5 *h = rc.h5;
+        rc.h5 = NULL;
+        if (drape_h5_commit(h, &err) != 0) goto fail;
     }
     /* the frames stay; until here a failure (closing drape.h5, writing
      * shadow.svg) removes them.  Those of an earlier, longer run in the

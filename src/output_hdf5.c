@@ -611,7 +611,7 @@ static int write_xmf(drape_h5 *h, drape_error *err)
     return 0;
 }
 
-int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
+int drape_h5_finish(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
 {
     if (!h) return 0;
     if (write_series(h, err) || (fin && write_final(h, fin, err))) goto fail;
@@ -629,6 +629,15 @@ int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
     h->file = -1;
     sync_path(h->tmp);
     if (write_xmf(h, err)) goto fail;
+    return 0;
+fail:
+    drape_h5_discard(h);
+    return -1;
+}
+
+int drape_h5_commit(drape_h5 *h, drape_error *err)
+{
+    if (!h) return 0;
     if (rename(h->tmp, h->path) != 0) {
         drape_error_set(err, DRAPE_E_IO, h->path, 0, 0, NULL, "cannot rename %s: %s", h->tmp,
                         strerror(errno));
@@ -644,6 +653,12 @@ int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
 fail:
     drape_h5_discard(h);
     return -1;
+}
+
+int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err)
+{
+    if (drape_h5_finish(h, fin, err) != 0) return -1;
+    return drape_h5_commit(h, err);
 }
 
 /* ----------------------------------------------------------- reading */

@@ -141,6 +141,53 @@ START_TEST(test_disk_full_message_says_why)
 }
 END_TEST
 
+/* A full disk met by the shadow picture of a single Cusick run, after
+ * drape.h5 was closed: the run fails (exit 3) and, as for any I/O error,
+ * leaves nothing of its own (docs/outputs.md, "Atomic files and
+ * errors").  Before the fix drape.h5 and drape.xmf had already been
+ * renamed into place and stayed (the frames went), and a directory the
+ * run made stayed with them.  Found by a review filling a small tmpfs at
+ * every size.  The 100 KiB limit lets drape.h5 (30 KiB at 3 cm), the
+ * frame and shadow.svg through and stops shadow.png (150 KiB). */
+START_TEST(test_disk_full_while_writing_shadow)
+{
+    static const char *cusick =
+        "run ../scenes/cusick.yaml --spacing 3cm --specimens 1 -q";
+    const char *dir = new_dir("full-shadow");
+    char args[1024], keep[700];
+    snprintf(keep, sizeof keep, "%s/keep.txt", dir);
+    FILE *k = fopen(keep, "w");
+    ck_assert_ptr_nonnull(k);
+    fputs("the user's\n", k);
+    fclose(k);
+    snprintf(args, sizeof args, "%s --out '%s'", cusick, dir);
+    int st = run_with("ulimit -f 200; trap '' XFSZ; exec", args);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_str_eq(out, "");
+    ck_assert_msg(strstr(err, "shadow.png") != NULL, "message: %s", err);
+    ck_assert_int_eq(count_files(dir, "drape"), 0);
+    ck_assert_int_eq(count_files(dir, "frame_"), 0);
+    ck_assert_int_eq(count_files(dir, "shadow"), 0);
+    ck_assert_int_eq(count_files(dir, ""), 3); /* ., .., keep.txt */
+
+    /* a directory the run created is removed */
+    char made[700];
+    snprintf(made, sizeof made, "%s/made-by-drape-shadow", tu_scratch_dir());
+    snprintf(args, sizeof args, "%s --out '%s'", cusick, made);
+    st = run_with("ulimit -f 200; trap '' XFSZ; exec", args);
+    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
+    ck_assert_msg(access(made, F_OK) != 0, "%s left behind", made);
+
+    /* without the limit the same run writes all of them */
+    const char *ok = new_dir("roomy-shadow");
+    snprintf(args, sizeof args, "%s --out '%s'", cusick, ok);
+    st = tu_run_drape(args, out, CAP, err, CAP);
+    ck_assert_msg(st == 0, "status %d: %s", st, err);
+    ck_assert_int_eq(count_files(ok, "drape.h5"), 1);
+    ck_assert_int_eq(count_files(ok, "shadow.png"), 1);
+}
+END_TEST
+
 /* An output directory that exists but cannot be written into: the error
  * comes before any computation, names the directory, and nothing stays.
  * Root ignores permission bits, so a read-only directory of sysfs is used
@@ -245,6 +292,7 @@ Suite *faults_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_disk_full_while_writing_frames);
     tcase_add_test(tc, test_disk_full_message_says_why);
+    tcase_add_test(tc, test_disk_full_while_writing_shadow);
     tcase_add_test(tc, test_unwritable_output_dir);
     tcase_add_test(tc, test_stdout_full);
     tcase_add_test(tc, test_stdout_full_long_result);

@@ -114,8 +114,22 @@ int drape_h5_frames(const drape_h5 *h);
 
 /* Write /times, /energies, fin (may be NULL), close the file, write the
  * XDMF sidecar and rename both into place.  Frees h in every case; on
- * failure removes the temporary files and returns -1 with err set. */
+ * failure removes the temporary files and returns -1 with err set.
+ * Same as drape_h5_finish followed by drape_h5_commit. */
 int drape_h5_close(drape_h5 *h, const drape_h5_final *fin, drape_error *err);
+
+/* The first half of drape_h5_close: everything but the renames.  Both
+ * files are complete under their temporary names; h stays valid only for
+ * drape_h5_commit (which puts them in place) or drape_h5_discard (which
+ * removes them), so that a run can write its other files first and keep
+ * none when one of them fails.  On failure frees h, removes the temporary
+ * files and returns -1 with err set. */
+int drape_h5_finish(drape_h5 *h, const drape_h5_final *fin, drape_error *err);
+
+/* Rename a finished h's files into place (drape.h5, then drape.xmf) and
+ * free h, in every case; -1 with err set (temporaries removed) on
+ * failure. */
+int drape_h5_commit(drape_h5 *h, drape_error *err);
 
 /* Close without keeping anything (temporary files removed); NULL is a
  * no-op. */
