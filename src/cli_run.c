@@ -840,13 +840,6 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         if (drape_h5_finish(h, &fin, &err) != 0) goto fail;
         rc.h5 = h; /* complete; put in place after the picture (below) */
     }
-    /* a resumed run that finished: the checkpoint-only file has served */
-    if (ri && !ri->had_h5 && !interrupted && !s.out_hdf5) {
-        char p[4300];
-        unlink(ri->h5_path);
-        snprintf(p, sizeof p, "%s/drape.xmf", out_dir);
-        unlink(p);
-    }
     /* the picture of one specimen (as for an ensemble), before the result
      * is printed: a run that cannot write it prints no result */
     if (!child && out_dir && have_dc &&
@@ -863,6 +856,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         drape_h5 *h = rc.h5;
         rc.h5 = NULL;
         if (drape_h5_commit(h, &err) != 0) goto fail;
+    }
+    /* a resumed run that finished: the checkpoint-only file has served
+     * (removed only now: a run that failed above can be resumed again) */
+    if (ri && !ri->had_h5 && !interrupted && !s.out_hdf5) {
+        char p[4300];
+        unlink(ri->h5_path);
+        snprintf(p, sizeof p, "%s/drape.xmf", out_dir);
+        unlink(p);
     }
     /* the frames stay; until here a failure (closing drape.h5, writing
      * shadow.svg) removes them.  Those of an earlier, longer run in the
