@@ -111,7 +111,14 @@ static int write_sums(const batch *b, drape_error *err)
     for (int k = 0; k < b->n + b->n_extra; k++) {
         char **row = k < b->n ? b->jobs[k].row : b->extra[k - b->n];
         if (!row) continue;
-        unsigned long long h = k < b->n ? b->jobs[k].sum : old_sum_of(b, row[COL_FILE]);
+        /* a row not (yet) made by this batch's run of the fabric (an old
+         * error, interrupted or changed fabric's row kept until its new
+         * run replaces it) keeps the sum of the text it was made from:
+         * with the new sum, a --resume after this one was stopped would
+         * take an edited fabric's old row as done */
+        const job *jb = k < b->n ? &b->jobs[k] : NULL;
+        unsigned long long h = jb && jb->state == JOB_DONE ? jb->sum
+                                                          : old_sum_of(b, row[COL_FILE]);
         if (h) fprintf(a.f, "%016llx\t%s\n", h, row[COL_FILE]);
     }
     return drape_cli_afile_commit(&a, err);

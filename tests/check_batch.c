@@ -518,6 +518,46 @@ START_TEST(test_resume_changed_inputs)
 }
 END_TEST
 
+/* A --resume that is itself stopped before a changed fabric's new run
+ * (SIGINT while another fabric runs, -j 1) wrote the fabric's new sum to
+ * inputs.sum next to its old row; the next --resume then took that row,
+ * made from the old text, as done and never ran the fabric again.  The
+ * old row keeps its old sum until its new run replaces it. */
+START_TEST(test_resume_changed_then_stopped)
+{
+    const char *dir = subdir("changed-stopped");
+    static char text[CAP];
+    char fab[1024], args[4096], first[1200];
+    ck_assert_int_eq(read_text(COTTON, text, CAP), 0);
+    snprintf(fab, sizeof fab, "%s", tu_write_file("edited-fabric.yaml", text));
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 0.3s --out %s", SCENE,
+             fab, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+
+    FILE *f = fopen(fab, "a");
+    ck_assert_ptr_nonnull(f);
+    fputs("# edited\n", f);
+    fclose(f);
+    clear_logs(dir);
+    /* denim first; stopped while it runs, before the edited fabric starts */
+    snprintf(first, sizeof first, "%s/logs/denim-wang.stderr", dir);
+    const char *const a[] = {"batch", "-q", SCENE, DENIM, fab, "--spacing", "5cm", "--t-max",
+                             "0.3s", "--out", dir, "--resume", NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_file_appears(pid, first, 20.0);
+    int ws = tu_signal_and_reap(pid, SIGINT, 0);
+    ck_assert(WIFEXITED(ws));
+    ck_assert_int_eq(WEXITSTATUS(ws), 130);
+    ck_assert_msg(!has_log(dir, "edited-fabric"), "the edited fabric ran: stopped too late");
+
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 0.3s --out %s --resume",
+             SCENE, fab, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_msg(has_log(dir, "edited-fabric"), "the edited fabric's old row was kept");
+    ck_assert_msg(strstr(err, "changed since its row was made: run again"), "%s", err);
+}
+END_TEST
+
 START_TEST(test_failed_run)
 {
     /* a numerical failure gives a row with status failed and the message;
@@ -907,6 +947,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_killed_batch_stops_runs);
     tcase_add_test(tc, test_resume_ensemble_row);
     tcase_add_test(tc, test_resume_changed_inputs);
+    tcase_add_test(tc, test_resume_changed_then_stopped);
     suite_add_tcase(s, tc);
     return s;
 }
