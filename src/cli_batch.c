@@ -122,8 +122,11 @@ static void log_path(const batch *b, const job *jb, const char *ext, char *out, 
     snprintf(out, n, "%s/logs/%s.%s", b->dir, jb->name, ext);
 }
 
-/* 1 if the checkpoint at path is a run of fabric (NAME depends on the
- * command line's order: another fabric may have had this NAME before). */
+/* 1 if the checkpoint at path is an interrupted run of fabric (NAME
+ * depends on the command line's order: another fabric may have had this
+ * NAME before) made from the file's present text (`drape run --resume`
+ * refuses a finished run and a changed file: the fabric then runs
+ * afresh). */
 static int checkpoint_is_for(const char *path, const char *fabric)
 {
     char buf[4096];
@@ -135,17 +138,26 @@ static int checkpoint_is_for(const char *path, const char *fabric)
     memset(&c, 0, sizeof c);
     if (drape_h5_checkpoint_read(path, &c, &e) != 0) return 0;
     const drape_kv *kv = drape_kv_find(c.run, c.n_run, "fabric_path");
+    const drape_kv *st = drape_kv_find(c.stats, c.n_stats, "status");
     int same = kv && kv->text && stat(kv->text, &have) == 0 && have.st_dev == want.st_dev &&
-               have.st_ino == want.st_ino;
+               have.st_ino == want.st_ino && st && st->text &&
+               strcmp(st->text, "interrupted") == 0;
+    if (same) {
+        char *now = drape_cli_read_file(buf, DRAPE_YDOC_MAX_BYTES, NULL, &e);
+        same = now && c.fabric_yaml && strcmp(now, c.fabric_yaml) == 0;
+        drape_free(now);
+    }
     drape_h5_checkpoint_free(&c);
     return same;
 }
 
-/* 1 if DIR/ensemble.json (path) is the manifest of an ensemble of this
- * fabric (the same file): an ensemble row's run, continued by `drape run
+/* 1 if DIR/ensemble.json (path) is the manifest of an unfinished
+ * ensemble (running or interrupted) of this fabric (the same file, its
+ * text's sum `sum`): an ensemble row's run, continued by `drape run
  * --resume DIR` like a single run's checkpoint; 0 otherwise (none,
- * unreadable, another fabric's: the row then runs again from the start). */
-static int ensemble_is_for(const char *path, const char *fabric)
+ * unreadable, finished, another fabric's, a changed file's: the row then
+ * runs again from the start). */
+static int ensemble_is_for(const char *path, const char *fabric, unsigned long long sum)
 {
     char buf[4096];
     struct stat want, have;
@@ -158,8 +170,29 @@ static int ensemble_is_for(const char *path, const char *fabric)
                json_object_is_type(v, json_type_string) &&
                stat(json_object_get_string(v), &have) == 0 && have.st_dev == want.st_dev &&
                have.st_ino == want.st_ino;
+    char hex[24];
+    snprintf(hex, sizeof hex, "%016llx", sum);
+    same = same && json_object_object_get_ex(o, "fabric_sum", &v) &&
+           json_object_is_type(v, json_type_string) && strcmp(json_object_get_string(v), hex) == 0;
+    same = same && json_object_object_get_ex(o, "status", &v) &&
+           json_object_is_type(v, json_type_string) &&
+           (strcmp(json_object_get_string(v), "running") == 0 ||
+            strcmp(json_object_get_string(v), "interrupted") == 0);
     json_object_put(o);
     return same;
+}
+
+/* 1 if the file at path was written since DIR/batch.args, which a batch
+ * without --resume writes anew: a checkpoint of a run without a row may
+ * be older, of a batch with other options (it continues with its own). */
+static int made_since_stamp(const batch *b, const char *path)
+{
+    char stamp[BATCH_PATH_MAX + 16];
+    struct stat s, f;
+    snprintf(stamp, sizeof stamp, "%s/batch.args", b->dir);
+    if (stat(stamp, &s) != 0 || stat(path, &f) != 0) return 0;
+    return f.st_mtim.tv_sec > s.st_mtim.tv_sec ||
+           (f.st_mtim.tv_sec == s.st_mtim.tv_sec && f.st_mtim.tv_nsec >= s.st_mtim.tv_nsec);
 }
 
 static int launch(batch *b, job *jb, drape_error *err)
@@ -181,8 +214,10 @@ static int launch(batch *b, job *jb, drape_error *err)
     char ck[BATCH_PATH_MAX + 16], man[BATCH_PATH_MAX + 16];
     snprintf(ck, sizeof ck, "%s/drape.h5", frames);
     snprintf(man, sizeof man, "%s/ensemble.json", frames);
-    if (jb->cont && ((access(ck, F_OK) == 0 && checkpoint_is_for(ck, jb->fabric)) ||
-                     (access(man, F_OK) == 0 && ensemble_is_for(man, jb->fabric)))) {
+    if (jb->cont && ((access(ck, F_OK) == 0 && (!jb->rowless || made_since_stamp(b, ck)) &&
+                      checkpoint_is_for(ck, jb->fabric)) ||
+                     (access(man, F_OK) == 0 && (!jb->rowless || made_since_stamp(b, man)) &&
+                      ensemble_is_for(man, jb->fabric, jb->sum)))) {
         /* the options are stored in the checkpoint or the ensemble's
          * manifest (batch.args made sure they are this batch's) */
         av[k++] = "--resume";
@@ -518,6 +553,13 @@ int drape_cli_batch(int argc, char **argv)
     for (int k = 0; k < b.n; k++) b.jobs[k].sum = drape_cli_batch_file_sum(b.jobs[k].fabric);
     if (drape_cli_batch_check_stamp(&b, resume, &err) != 0) goto fail;
     if (resume && (drape_cli_batch_read_sums(&b, &err) != 0 || drape_cli_batch_load_previous(&b, &err) != 0)) goto fail;
+    /* a fabric without a row whose run was stopped when the batch was
+     * killed outright (its row only in logs/NAME.csv) continues from its
+     * checkpoint or manifest, as an interrupted row's run does, if they
+     * are of this fabric and its present text and were written since
+     * batch.args, by a run of this batch's options (launch) */
+    for (int k = 0; k < b.n; k++)
+        if (resume && b.frames && !b.jobs[k].row) b.jobs[k].cont = b.jobs[k].rowless = 1;
     for (int k = 0; k < b.n; k++)
         if (b.jobs[k].state == JOB_DONE) {
             b.n_done++;

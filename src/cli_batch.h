@@ -40,6 +40,7 @@ typedef struct job {
     enum job_state state;
     int resumed;                 /* row taken from an earlier results.csv */
     int cont;                    /* continue its interrupted run (--resume --frames) */
+    int rowless;                 /* cont without a row: its run's batch was killed */
     char **row;                  /* N_COLS fields, or NULL */
     unsigned long long sum;      /* of the fabric file's text (0: unreadable) */
 } job;

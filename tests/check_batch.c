@@ -775,6 +775,97 @@ START_TEST(test_killed_batch_stops_runs)
 }
 END_TEST
 
+/* After a batch killed outright, its run stopped as interrupted with its
+ * checkpoint (test_killed_batch_stops_runs) but left no row in
+ * results.csv; `batch --resume --frames` then ran that fabric afresh
+ * over its checkpoint (frame 0 written again) instead of continuing it
+ * as it does an interrupted row's run. */
+START_TEST(test_killed_batch_resumed)
+{
+    const char *dir = subdir("killed-resumed");
+    char wait_for[1024], frame0[1024], log[1024], cmd[2400], args[2048];
+    snprintf(wait_for, sizeof wait_for, "%s/frames/cotton-breen/frame_000003.obj", dir);
+    snprintf(frame0, sizeof frame0, "%s/frames/cotton-breen/frame_000000.obj", dir);
+    snprintf(log, sizeof log, "%s/logs/cotton-breen.csv", dir);
+    const char *const a[] = {"batch", "-q", SCENE, COTTON, "--spacing", "5cm", "--t-max",
+                             "1s", "--frames", "--out", dir, NULL};
+    pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_file_appears(pid, wait_for, 20.0);
+    tu_signal_and_reap(pid, SIGKILL, 0);
+    int stopped = 0;
+    for (int i = 0; i < 200 && !stopped; i++) { /* 10 s */
+        snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
+        stopped = system(cmd) == 0;
+        if (!stopped) {
+            struct timespec w = {0, 50 * 1000 * 1000};
+            nanosleep(&w, NULL);
+        }
+    }
+    ck_assert_msg(stopped, "the run was not interrupted when its batch was killed");
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 0); /* the batch died before it collected the run */
+    struct stat before, after;
+    ck_assert_int_eq(stat(frame0, &before), 0);
+
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 1s --frames --out %s "
+             "--resume", SCENE, COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_int_eq(stat(frame0, &after), 0);
+    ck_assert_msg(before.st_ino == after.st_ino, "frame 0 was written again: not continued");
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 1);
+    ck_assert_str_eq(cell(t, 0, "status"), "t_max");
+    ck_assert_str_eq(cell(t, 0, "t_end_s"), "1");
+
+    /* a fabric without a row whose frames hold a finished run (its row
+     * dropped: a batch without it in between) runs afresh: `drape run
+     * --resume` has nothing to continue there */
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 1s --frames --out %s",
+             SCENE, DENIM, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(args, sizeof args, "batch -q %s %s %s --spacing 5cm --t-max 1s --frames --out %s "
+             "--resume", SCENE, DENIM, COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    ck_assert_str_eq(cell(t, 1, "fabric_file"), COTTON);
+    ck_assert_str_eq(cell(t, 1, "status"), "t_max");
+
+    /* nor does one whose checkpoint is older than batch.args: a batch
+     * with other options (t-max 0.5 s) was started afresh since, and the
+     * run would continue with the checkpoint's (1 s) */
+    clear_logs(dir);
+    snprintf(cmd, sizeof cmd, "rm -f '%s/frames/cotton-breen/'*", dir);
+    ck_assert_int_eq(system(cmd), 0);
+    pid = tu_spawn_drape(a, NULL, NULL, 0);
+    ck_assert_file_appears(pid, wait_for, 20.0);
+    tu_signal_and_reap(pid, SIGKILL, 0);
+    stopped = 0;
+    for (int i = 0; i < 200 && !stopped; i++) {
+        snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
+        stopped = system(cmd) == 0;
+        if (!stopped) {
+            struct timespec w = {0, 50 * 1000 * 1000};
+            nanosleep(&w, NULL);
+        }
+    }
+    ck_assert_msg(stopped, "the run was not interrupted when its batch was killed");
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 0.5s --frames --out %s",
+             SCENE, DENIM, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(args, sizeof args, "batch -q %s %s %s --spacing 5cm --t-max 0.5s --frames --out %s "
+             "--resume", SCENE, DENIM, COTTON, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    ck_assert_str_eq(cell(t, 1, "fabric_file"), COTTON);
+    ck_assert_str_eq(cell(t, 1, "t_end_s"), "0.5");
+    free(t);
+}
+END_TEST
+
 /* A batch of an ensemble scene interrupted while a dynamic specimen runs:
  * `batch --resume --frames` ran that fabric's whole ensemble again from
  * the start (its specimen-001 frames rewritten).  It now continues it from
@@ -945,6 +1036,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_interrupted_row_resumed);
     tcase_add_test(tc, test_resume_swapped_names);
     tcase_add_test(tc, test_killed_batch_stops_runs);
+    tcase_add_test(tc, test_killed_batch_resumed);
     tcase_add_test(tc, test_resume_ensemble_row);
     tcase_add_test(tc, test_resume_changed_inputs);
     tcase_add_test(tc, test_resume_changed_then_stopped);
