@@ -95,6 +95,7 @@ static void on_signal(int sig)
 static int mkdir_p(const char *dir, drape_error *err)
 {
     char p[BATCH_PATH_MAX];
+    if (!*dir) return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "empty directory name");
     if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p)
         return drape_error_set(err, DRAPE_E_IO, dir, 0, 0, NULL, "path too long");
     for (char *c = p + 1;; c++) {
@@ -446,7 +447,10 @@ int drape_cli_batch(int argc, char **argv)
                 return usage_error("-j: expected 0..1024, got `%s'", optarg);
             break;
         }
-        case O_OUT: b.dir = optarg; break;
+        case O_OUT:
+            if (!*optarg) return usage_error("%s", "--out: expected a directory, got an empty name");
+            b.dir = optarg;
+            break;
         case O_RESUME: resume = 1; break;
         case O_FRAMES: b.frames = 1; break;
         case O_PASS: {

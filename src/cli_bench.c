@@ -587,7 +587,11 @@ int drape_cli_bench(int argc, char **argv)
                 return bench_usage_error("%s", why);
             break;
         }
-        case O_OUT: out_dir = optarg; break;
+        case O_OUT:
+            if (!*optarg)
+                return bench_usage_error("%s", "--out: expected a directory, got an empty name");
+            out_dir = optarg;
+            break;
         case O_NAME:
             if (!*optarg || strchr(optarg, '/'))
                 return bench_usage_error("--name: expected a file name stem, got `%s'", optarg);

@@ -887,7 +887,10 @@ int drape_cli_import(int argc, char **argv)
     int c;
     while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         switch (c) {
-        case O_OUTDIR: im.dir = optarg; break;
+        case O_OUTDIR:
+            if (!*optarg) return usage_error("%s", "--out-dir: expected a directory, got an empty name");
+            im.dir = optarg;
+            break;
         case O_NAME: name = optarg; break;
         case O_FORCE: im.force = 1; break;
         case 'h': fputs(import_usage, stdout); return 0;

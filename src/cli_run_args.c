@@ -442,8 +442,14 @@ int drape_cli_run(int argc, char **argv)
     while ((c = getopt_long(argc, argv, "qhj:", opts, &li)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;
-        case O_OUT: out_dir = optarg; break;
-        case O_RESUME: resume_dir = optarg; break;
+        case O_OUT:
+        case O_RESUME:
+            if (!*optarg)
+                return usage_error("%s: expected a directory, got an empty name%s",
+                                   c == O_OUT ? "--out" : "--resume", "");
+            if (c == O_OUT) out_dir = optarg;
+            else resume_dir = optarg;
+            break;
         case O_VALUE: {
             char name[32], why[512];
             snprintf(name, sizeof name, "--%s", opts[li].name);

@@ -129,6 +129,29 @@ START_TEST(test_usage_errors)
 }
 END_TEST
 
+/* An empty directory name given to --out, --resume or --out-dir was
+ * taken as a path: `drape run --out ''` failed with exit 3 and "cannot
+ * create directory" naming no path, and batch's directory maker read past
+ * the empty string's end.  Now it is a bad command line (exit 2) naming
+ * the option, before anything runs. */
+START_TEST(test_empty_dir_options)
+{
+    static const char *const cmd[][2] = {
+        {"run -q ../scenes/hang.yaml --spacing 5cm --out ''", "--out:"},
+        {"run -q --resume ''", "--resume:"},
+        {"batch -q ../scenes/hang.yaml ../fabrics/denim-wang.yaml --spacing 5cm --out ''", "--out:"},
+        {"bench --out ''", "--out:"},
+        {"import arcsim --out-dir '' nonexistent.json", "--out-dir:"}};
+    for (size_t i = 0; i < sizeof cmd / sizeof cmd[0]; i++) {
+        int st = tu_run_drape(cmd[i][0], out, CAP, err, CAP);
+        ck_assert_msg(st == 2, "drape %s: status %d, %s", cmd[i][0], st, err);
+        ck_assert_msg(strstr(err, cmd[i][1]) && strstr(err, "empty name"), "drape %s: %s",
+                      cmd[i][0], err);
+        ck_assert_msg(out[0] == 0, "drape %s printed %s", cmd[i][0], out);
+    }
+}
+END_TEST
+
 /* Every file in a directory of the source tree passes `drape check`. */
 static void check_dir_valid(const char *dir)
 {
@@ -272,6 +295,7 @@ Suite *cli_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_help_version);
     tcase_add_test(tc, test_usage_errors);
+    tcase_add_test(tc, test_empty_dir_options);
     tcase_add_test(tc, test_data_dirs);
     tcase_add_test(tc, test_shipped_files_valid);
     tcase_add_test(tc, test_check_damping);
