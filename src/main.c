@@ -1,6 +1,7 @@
 /* main.c: drape's command line: global options and subcommand dispatch.
  * Only the command line prints or exits (STYLE.md 6). */
 #include <dlfcn.h>
+#include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -158,7 +159,30 @@ static void openmp_inline(void)
     if (sym) memcpy(&gomp_parallel_next, &sym, sizeof gomp_parallel_next);
 }
 
+static int dispatch(int argc, char **argv);
+
+/* What a command printed on stdout must have reached it: a write that
+ * failed (a full disk, a closed pipe with SIGPIPE ignored) and that the
+ * command did not see itself (`drape check` and the help texts print and
+ * return 0) makes the exit status that of an I/O error, as the commands
+ * that check their own result do ("cannot write the result"). */
+static int finish_stdout(int rc)
+{
+    errno = 0;
+    if (fflush(stdout) == 0 && !ferror(stdout)) return rc;
+    if (rc != 0) return rc; /* the command failed already, and said so */
+    int e = errno;
+    fprintf(stderr, "drape: <stdout>: cannot write the output%s%s\n", e ? ": " : "",
+            e ? strerror(e) : "");
+    return drape_error_exit_status(DRAPE_E_IO);
+}
+
 int main(int argc, char **argv)
+{
+    return finish_stdout(dispatch(argc, argv));
+}
+
+static int dispatch(int argc, char **argv)
 {
     limit_openmp(argv);
     openmp_inline();

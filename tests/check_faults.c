@@ -261,6 +261,33 @@ START_TEST(test_stdout_full_long_result)
 }
 END_TEST
 
+/* The commands that print and return 0 without checking their output
+ * (`drape check`, the help and version texts, compare) exited 0 with
+ * stdout on a full disk: the output lost and nothing said.  Found by a
+ * review of the output writers.  Every command's stdout is now checked
+ * when it ends: I/O status 3 and a message; a command that failed keeps
+ * its own status. */
+START_TEST(test_stdout_full_every_command)
+{
+    static const char *const cmds[] = {
+        "check ../fabrics/denim-wang.yaml ../scenes/hang.yaml", "--help", "--version", "help",
+        "run --help", "batch --help", "check --help", "compare --help", NULL};
+    for (int i = 0; cmds[i]; i++) {
+        int st = tu_run_drape(cmds[i], out, CAP, err, CAP);
+        ck_assert_msg(st == 0 && out[0], "drape %s: status %d: %s", cmds[i], st, err);
+        st = run_with("sh -c 'exec \"$0\" \"$@\" >/dev/full'", cmds[i]);
+        ck_assert_msg(st == 3, "drape %s >/dev/full: status %d (want 3), stderr: %s", cmds[i],
+                      st, err);
+        ck_assert_msg(strstr(err, "drape: <stdout>: cannot write"), "drape %s: %s", cmds[i], err);
+    }
+    /* a command that failed for its own reason keeps its status */
+    ck_assert_int_eq(run_with("sh -c 'exec \"$0\" \"$@\" >/dev/full'",
+                              "check /nonexistent-drape.yaml"), 3);
+    ck_assert_int_eq(run_with("sh -c 'exec \"$0\" \"$@\" >/dev/full'",
+                              "run --spacing 5kg ../scenes/hang.yaml"), 2);
+}
+END_TEST
+
 START_TEST(test_missing_fabric)
 {
     const char *p = tu_write_file("orphan.yaml",
@@ -296,6 +323,7 @@ Suite *faults_suite(void)
     tcase_add_test(tc, test_unwritable_output_dir);
     tcase_add_test(tc, test_stdout_full);
     tcase_add_test(tc, test_stdout_full_long_result);
+    tcase_add_test(tc, test_stdout_full_every_command);
     tcase_add_test(tc, test_missing_fabric);
     suite_add_tcase(s, tc);
     return s;
