@@ -737,6 +737,20 @@ START_TEST(test_bad_corpus)
 }
 END_TEST
 
+/* 1 once the run's log (logs/NAME.csv) says interrupted, 0 if it has not
+ * within 10 s: a run whose batch was killed outright stops by itself. */
+static int wait_log_interrupted(const char *log)
+{
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
+    for (int i = 0; i < 200; i++) {
+        if (system(cmd) == 0) return 1;
+        struct timespec w = {0, 50 * 1000 * 1000};
+        nanosleep(&w, NULL);
+    }
+    return 0;
+}
+
 /* SIGTERM to a batch stops its running fabric at the next output point:
  * its row says interrupted (exit status 143); --resume with --frames
  * continues that run from its checkpoint (`drape run --resume`) and the
@@ -756,15 +770,7 @@ START_TEST(test_killed_batch_stops_runs)
     pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
     ck_assert_msg(tu_wait_file(pid, first, 20.0) == 0, "the run did not start");
     tu_signal_and_reap(pid, SIGKILL, 0);
-    int stopped = 0;
-    for (int i = 0; i < 200 && !stopped; i++) { /* 10 s */
-        snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
-        stopped = system(cmd) == 0;
-        if (!stopped) {
-            struct timespec w = {0, 50 * 1000 * 1000};
-            nanosleep(&w, NULL);
-        }
-    }
+    int stopped = wait_log_interrupted(log);
     if (!stopped) { /* do not leave it running */
         snprintf(cmd, sizeof cmd, "pkill -TERM -f -- '--out %s/frames/cotton-breen'", dir);
         if (system(cmd) != 0) { /* nothing matched */ }
@@ -774,6 +780,23 @@ START_TEST(test_killed_batch_stops_runs)
     ck_assert_msg(access(cmd, F_OK) == 0, "no checkpoint");
 }
 END_TEST
+
+/* A fresh batch of denim alone into dir (results.csv without cotton's
+ * row), then `--resume` with denim and cotton, both at --t-max tmax with
+ * --frames; loads the table into t: two rows, cotton's the second. */
+static void denim_then_cotton_resumed(const char *dir, const char *tmax, table *t)
+{
+    char args[2048];
+    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max %s --frames --out %s",
+             SCENE, DENIM, tmax, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(args, sizeof args, "batch -q %s %s %s --spacing 5cm --t-max %s --frames --out %s "
+             "--resume", SCENE, DENIM, COTTON, tmax, dir);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    ck_assert_str_eq(cell(t, 1, "fabric_file"), COTTON);
+}
 
 /* After a batch killed outright, its run stopped as interrupted with its
  * checkpoint (test_killed_batch_stops_runs) but left no row in
@@ -792,15 +815,7 @@ START_TEST(test_killed_batch_resumed)
     pid_t pid = tu_spawn_drape(a, NULL, NULL, 0);
     ck_assert_file_appears(pid, wait_for, 20.0);
     tu_signal_and_reap(pid, SIGKILL, 0);
-    int stopped = 0;
-    for (int i = 0; i < 200 && !stopped; i++) { /* 10 s */
-        snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
-        stopped = system(cmd) == 0;
-        if (!stopped) {
-            struct timespec w = {0, 50 * 1000 * 1000};
-            nanosleep(&w, NULL);
-        }
-    }
+    int stopped = wait_log_interrupted(log);
     ck_assert_msg(stopped, "the run was not interrupted when its batch was killed");
     table *t = malloc(sizeof *t);
     ck_assert_ptr_nonnull(t);
@@ -822,15 +837,7 @@ START_TEST(test_killed_batch_resumed)
     /* a fabric without a row whose frames hold a finished run (its row
      * dropped: a batch without it in between) runs afresh: `drape run
      * --resume` has nothing to continue there */
-    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 1s --frames --out %s",
-             SCENE, DENIM, dir);
-    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
-    snprintf(args, sizeof args, "batch -q %s %s %s --spacing 5cm --t-max 1s --frames --out %s "
-             "--resume", SCENE, DENIM, COTTON, dir);
-    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
-    load_table(dir, t);
-    ck_assert_int_eq(t->nrow, 2);
-    ck_assert_str_eq(cell(t, 1, "fabric_file"), COTTON);
+    denim_then_cotton_resumed(dir, "1s", t);
     ck_assert_str_eq(cell(t, 1, "status"), "t_max");
 
     /* nor does one whose checkpoint is older than batch.args: a batch
@@ -842,25 +849,9 @@ START_TEST(test_killed_batch_resumed)
     pid = tu_spawn_drape(a, NULL, NULL, 0);
     ck_assert_file_appears(pid, wait_for, 20.0);
     tu_signal_and_reap(pid, SIGKILL, 0);
-    stopped = 0;
-    for (int i = 0; i < 200 && !stopped; i++) {
-        snprintf(cmd, sizeof cmd, "grep -q interrupted '%s' 2>/dev/null", log);
-        stopped = system(cmd) == 0;
-        if (!stopped) {
-            struct timespec w = {0, 50 * 1000 * 1000};
-            nanosleep(&w, NULL);
-        }
-    }
+    stopped = wait_log_interrupted(log);
     ck_assert_msg(stopped, "the run was not interrupted when its batch was killed");
-    snprintf(args, sizeof args, "batch -q %s %s --spacing 5cm --t-max 0.5s --frames --out %s",
-             SCENE, DENIM, dir);
-    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
-    snprintf(args, sizeof args, "batch -q %s %s %s --spacing 5cm --t-max 0.5s --frames --out %s "
-             "--resume", SCENE, DENIM, COTTON, dir);
-    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
-    load_table(dir, t);
-    ck_assert_int_eq(t->nrow, 2);
-    ck_assert_str_eq(cell(t, 1, "fabric_file"), COTTON);
+    denim_then_cotton_resumed(dir, "0.5s", t);
     ck_assert_str_eq(cell(t, 1, "t_end_s"), "0.5");
     free(t);
 }

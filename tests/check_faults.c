@@ -76,45 +76,63 @@ static const char *new_dir(const char *name)
     return p;
 }
 
-START_TEST(test_disk_full_while_writing_frames)
+/* Run `run --out DIR` under the file size limit `ulimit -f blocks` (512-byte
+ * blocks) into DIR holding the user's keep.txt: the run must fail with exit 3,
+ * print nothing on stdout, name `names` in its message and leave DIR as it
+ * was (no drape*, frame_*, shadow*, only keep.txt).  The same run into a
+ * directory it makes must remove it, and without the limit must succeed and
+ * write drape.h5: the limit made the failure.  dir_stem names the three
+ * directories.  Returns the first run's stderr (in err). */
+static void assert_full_disk_leaves_nothing(const char *run, int blocks, const char *names,
+                                            const char *dir_stem)
 {
-    const char *dir = new_dir("full");
-    char args[1024], keep[700];
+    char name[200], args[1024], keep[700], prefix[100], made[700];
+    snprintf(name, sizeof name, "%s", dir_stem);
+    const char *dir = new_dir(name);
     snprintf(keep, sizeof keep, "%s/keep.txt", dir);
     FILE *k = fopen(keep, "w");
     ck_assert_ptr_nonnull(k);
     fputs("the user's\n", k);
     fclose(k);
-    snprintf(args, sizeof args, "%s --out '%s'", hang, dir);
-    /* 32 blocks of 512 bytes (POSIX sh units) = 16 KiB: drape.h5 fails at
-     * its fifth frame, after five OBJ frames (3.5 KiB each) were written */
-    int st = run_with("ulimit -f 32; trap '' XFSZ; exec", args);
+    snprintf(prefix, sizeof prefix, "ulimit -f %d; trap '' XFSZ; exec", blocks);
+    snprintf(args, sizeof args, "%s --out '%s'", run, dir);
+    int st = run_with(prefix, args);
     ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
     ck_assert_str_eq(out, "");
-    ck_assert_msg(strncmp(err, "drape: ", 7) == 0 && strstr(err, "drape.h5") != NULL,
-                  "message: %s", err);
-    /* HDF5's message is quoted on one line */
-    ck_assert_msg(strchr(err, '\n') == err + strlen(err) - 1, "message: %s", err);
-    ck_assert_int_eq(count_files(dir, "drape.h5"), 0);
-    ck_assert_int_eq(count_files(dir, "drape.xmf"), 0);
+    ck_assert_msg(strncmp(err, "drape: ", 7) == 0 && strstr(err, names) != NULL, "message: %s",
+                  err);
+    ck_assert_int_eq(count_files(dir, "drape"), 0);
     ck_assert_int_eq(count_files(dir, "frame_"), 0);
+    ck_assert_int_eq(count_files(dir, "shadow"), 0);
     ck_assert_int_eq(count_files(dir, "keep.txt"), 1);
     ck_assert_int_eq(count_files(dir, ""), 3); /* ., .., keep.txt */
+    char first_err[CAP];
+    snprintf(first_err, sizeof first_err, "%s", err);
 
     /* a directory the run created is removed with its contents */
-    char made[700];
-    snprintf(made, sizeof made, "%s/made-by-drape", tu_scratch_dir());
-    snprintf(args, sizeof args, "%s --out '%s'", hang, made);
-    st = run_with("ulimit -f 32; trap '' XFSZ; exec", args);
+    snprintf(made, sizeof made, "%s/made-by-drape-%s", tu_scratch_dir(), dir_stem);
+    snprintf(args, sizeof args, "%s --out '%s'", run, made);
+    st = run_with(prefix, args);
     ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
     ck_assert_msg(access(made, F_OK) != 0, "%s left behind", made);
 
-    /* the same run without the limit succeeds: the limit made the failure */
-    const char *ok = new_dir("roomy");
-    snprintf(args, sizeof args, "%s --out '%s'", hang, ok);
+    /* the same run without the limit succeeds */
+    snprintf(name, sizeof name, "roomy-%s", dir_stem);
+    const char *ok = new_dir(name);
+    snprintf(args, sizeof args, "%s --out '%s'", run, ok);
     st = tu_run_drape(args, out, CAP, err, CAP);
     ck_assert_msg(st == 0, "status %d: %s", st, err);
     ck_assert_int_eq(count_files(ok, "drape.h5"), 1);
+    snprintf(err, CAP, "%s", first_err);
+}
+
+START_TEST(test_disk_full_while_writing_frames)
+{
+    /* 32 blocks of 512 bytes (POSIX sh units) = 16 KiB: drape.h5 fails at
+     * its fifth frame, after five OBJ frames (3.5 KiB each) were written */
+    assert_full_disk_leaves_nothing(hang, 32, "drape.h5", "full");
+    /* HDF5's message is quoted on one line */
+    ck_assert_msg(strchr(err, '\n') == err + strlen(err) - 1, "message: %s", err);
 }
 END_TEST
 
@@ -151,40 +169,9 @@ END_TEST
  * frame and shadow.svg through and stops shadow.png (150 KiB). */
 START_TEST(test_disk_full_while_writing_shadow)
 {
-    static const char *cusick =
-        "run ../scenes/cusick.yaml --spacing 3cm --specimens 1 -q";
-    const char *dir = new_dir("full-shadow");
-    char args[1024], keep[700];
-    snprintf(keep, sizeof keep, "%s/keep.txt", dir);
-    FILE *k = fopen(keep, "w");
-    ck_assert_ptr_nonnull(k);
-    fputs("the user's\n", k);
-    fclose(k);
-    snprintf(args, sizeof args, "%s --out '%s'", cusick, dir);
-    int st = run_with("ulimit -f 200; trap '' XFSZ; exec", args);
-    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
-    ck_assert_str_eq(out, "");
-    ck_assert_msg(strstr(err, "shadow.png") != NULL, "message: %s", err);
-    ck_assert_int_eq(count_files(dir, "drape"), 0);
-    ck_assert_int_eq(count_files(dir, "frame_"), 0);
-    ck_assert_int_eq(count_files(dir, "shadow"), 0);
-    ck_assert_int_eq(count_files(dir, ""), 3); /* ., .., keep.txt */
-
-    /* a directory the run created is removed */
-    char made[700];
-    snprintf(made, sizeof made, "%s/made-by-drape-shadow", tu_scratch_dir());
-    snprintf(args, sizeof args, "%s --out '%s'", cusick, made);
-    st = run_with("ulimit -f 200; trap '' XFSZ; exec", args);
-    ck_assert_msg(st == 3, "status %d (want 3), stderr: %s", st, err);
-    ck_assert_msg(access(made, F_OK) != 0, "%s left behind", made);
-
-    /* without the limit the same run writes all of them */
-    const char *ok = new_dir("roomy-shadow");
-    snprintf(args, sizeof args, "%s --out '%s'", cusick, ok);
-    st = tu_run_drape(args, out, CAP, err, CAP);
-    ck_assert_msg(st == 0, "status %d: %s", st, err);
-    ck_assert_int_eq(count_files(ok, "drape.h5"), 1);
-    ck_assert_int_eq(count_files(ok, "shadow.png"), 1);
+    assert_full_disk_leaves_nothing("run ../scenes/cusick.yaml --spacing 3cm --specimens 1 -q", 200,
+                                    "shadow.png", "full-shadow");
+    ck_assert_int_eq(count_files(new_dir("roomy-full-shadow"), "shadow.png"), 1);
 }
 END_TEST
 

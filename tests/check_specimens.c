@@ -400,37 +400,49 @@ END_TEST
  * whole, whatever it holds: a tab, a newline, a backslash, a control
  * character; its picture's legend stays XML (a C0 control other than tab,
  * LF, CR is not an XML character: the SVG was not well-formed). */
-START_TEST(test_ensemble_texts)
+/* Run a 2-specimen static Cusick ensemble (3 cm) of cotton-breen renamed
+ * `fabric: yaml_name` (a YAML scalar as written) with --out DIR/stem-out;
+ * check that it succeeds with no failed specimen and that the JSON's
+ * `fabric` is want (the name as read); its shadow.svg's path in svg. */
+static void run_named_ensemble(const char *yaml_name, const char *want, const char *stem,
+                               char *svg, size_t svg_cap)
 {
     FILE *fp = fopen("../fabrics/cotton-breen.yaml", "r");
     ck_assert_ptr_nonnull(fp);
     static char text[65536];
     size_t len = 0;
-    char line[1024];
+    char line[1024], named[600];
+    snprintf(named, sizeof named, "fabric: %s\n", yaml_name);
     while (fgets(line, sizeof line, fp)) {
-        const char *l = strncmp(line, "fabric:", 7) == 0 ? "fabric: \"tab\\tnew\\nline\\\\end\\x01<&\"\n"
-                                                         : line;
+        const char *l = strncmp(line, "fabric:", 7) == 0 ? named : line;
         ck_assert_uint_lt(len + strlen(l), sizeof text);
         memcpy(text + len, l, strlen(l) + 1);
         len += strlen(l);
     }
     fclose(fp);
-    char args[4096], dir[900], svg[1000];
-    snprintf(dir, sizeof dir, "%s/ens-name-out", tu_scratch_dir());
+    char args[4096], dir[900], file[300];
+    snprintf(dir, sizeof dir, "%s/%s-out", tu_scratch_dir(), stem);
+    snprintf(file, sizeof file, "%s.yaml", stem);
     snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --fabric %s --spacing 3cm "
-             "--method static --specimens 2 -j 1 --out %s", tu_write_file("ens-name.yaml", text),
-             dir);
+             "--method static --specimens 2 -j 1 --out %s", tu_write_file(file, text), dir);
     int st = tu_run_drape(args, out, CAP, err, CAP);
     ck_assert_msg(st == 0, "exit %d, %s", st, err);
     json_object *o = json_tokener_parse(out);
     ck_assert_msg(o != NULL, "%s", out);
     json_object *f;
     ck_assert(json_object_object_get_ex(o, "fabric", &f));
-    ck_assert_str_eq(json_object_get_string(f), "tab\tnew\nline\\end\001<&");
+    ck_assert_str_eq(json_object_get_string(f), want);
     ck_assert_int_eq((int)jnum(o, "specimens_failed"), 0);
     json_object_put(o);
-    snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
+    snprintf(svg, svg_cap, "%s/shadow.svg", dir);
     ck_assert_int_eq(xpath_count(svg, "//s:polygon[@class='shadow']"), 2);
+}
+
+START_TEST(test_ensemble_texts)
+{
+    char svg[1000];
+    run_named_ensemble("\"tab\\tnew\\nline\\\\end\\x01<&\"", "tab\tnew\nline\\end\001<&",
+                       "ens-name", svg, sizeof svg);
     ck_assert_int_eq(xpath_count(svg, "//s:text[contains(., 'end <&, cusick')]"), 1);
 }
 END_TEST
@@ -444,34 +456,9 @@ END_TEST
  * fabric names on the picture. */
 START_TEST(test_ensemble_text_noncharacter)
 {
-    FILE *fp = fopen("../fabrics/cotton-breen.yaml", "r");
-    ck_assert_ptr_nonnull(fp);
-    static char text[65536];
-    size_t len = 0;
-    char line[1024];
-    while (fgets(line, sizeof line, fp)) {
-        const char *l = strncmp(line, "fabric:", 7) == 0 ? "fabric: \"odd\\uFFFEname\\uFFFFend\"\n"
-                                                         : line;
-        ck_assert_uint_lt(len + strlen(l), sizeof text);
-        memcpy(text + len, l, strlen(l) + 1);
-        len += strlen(l);
-    }
-    fclose(fp);
-    char args[4096], dir[900], svg[1000];
-    snprintf(dir, sizeof dir, "%s/ens-nonchar-out", tu_scratch_dir());
-    snprintf(args, sizeof args, "run -q ../scenes/cusick.yaml --fabric %s --spacing 3cm "
-             "--method static --specimens 2 -j 1 --out %s",
-             tu_write_file("ens-nonchar.yaml", text), dir);
-    int st = tu_run_drape(args, out, CAP, err, CAP);
-    ck_assert_msg(st == 0, "exit %d, %s", st, err);
-    json_object *o = json_tokener_parse(out);
-    ck_assert_msg(o != NULL, "%s", out);
-    json_object *f;
-    ck_assert(json_object_object_get_ex(o, "fabric", &f));
-    ck_assert_str_eq(json_object_get_string(f), "odd\xEF\xBF\xBEname\xEF\xBF\xBF" "end");
-    json_object_put(o);
-    snprintf(svg, sizeof svg, "%s/shadow.svg", dir);
-    ck_assert_int_eq(xpath_count(svg, "//s:polygon[@class='shadow']"), 2);
+    char svg[1000];
+    run_named_ensemble("\"odd\\uFFFEname\\uFFFFend\"", "odd\xEF\xBF\xBEname\xEF\xBF\xBF" "end",
+                       "ens-nonchar", svg, sizeof svg);
     ck_assert_int_eq(
         xpath_count(svg, "//s:text[contains(., 'odd\xEF\xBF\xBDname\xEF\xBF\xBD" "end, cusick')]"), 1);
 }
