@@ -467,6 +467,10 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                           resume_dir || ra->no_warnings ? NULL : fabric_warn, &s.terms) != 0)
         goto fail;
     if (drape_scene_check_with_fabric(&s, &f, &err) != 0) goto fail;
+    /* KLU's fill grows faster than CHOLMOD's (docs/scenes.md, "Memory") */
+    if (linsol == DRAPE_LINSOL_KLU && method == DRAPE_METHOD_DYNAMIC &&
+        drape_scene_check_memory(&s, DRAPE_SCENE_MEM_KLU, &err) != 0)
+        goto fail;
     L = drape_lattice_new(&s, &f, &err);
     if (!L) goto fail;
     if (ri && ri->ck.n != L->n) {

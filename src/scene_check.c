@@ -11,11 +11,29 @@
  * e.g. 0.30/0.01 = 29.999999999999996); a circle of diameter d is centred on
  * a lattice point and holds about pi (d / 2s)^2 particles.
  *
- * Memory estimate: about SCENE_BYTES_PER_PARTICLE = 2 KiB per particle for
- * the model (state, masses, elements) and the sparse Jacobian (a particle
- * couples to about 21 others through bending hinges: ~190 nonzeros of
- * 8 + 4 bytes in K, twice that in the first-order system, plus integrator
- * vectors); direct-solver fill-in comes on top.  Scenes above 8 GiB or 20
+ * Memory estimate (drape_scene_memory_bytes; docs/scenes.md, "Memory"):
+ * the peak resident memory of one run, measured with getrusage's
+ * ru_maxrss on the hang scene from 254 to 184 000 free particles for
+ * every method, integrator and linear solver, is bounded by
+ *     bytes = B0 + n (a + c log2 n)                               (M.1)
+ * with n the lattice's particle count.  B0 = 32 MiB is the process itself
+ * (the libraries: 27-29 MiB at 254 particles).  The linear part a holds
+ * the model (state, masses, elements), the sparse Jacobian K and D (a
+ * particle couples to about 21 others through bending hinges: ~190
+ * nonzeros of 8 + 4 bytes in each, twice in the first-order system), the
+ * integrator's vectors and the assembled Schur matrix; the n log2 n part
+ * is the fill-in of CHOLMOD's supernodal Cholesky factor of the 3 nf x
+ * 3 nf Schur matrix (or the static solver's Hessian) under a
+ * nested-dissection-like ordering of the planar lattice (George 1973:
+ * O(n log n) nonzeros for a 2-D grid).  Measured per particle above B0:
+ * 15.7 KiB at 959, 21 KiB at 22 800 particles, rising by about
+ * 1.2 KiB per doubling.  KLU's LU of the 6 nf first-order Jacobian
+ * (--linear-solver klu, AMD ordering, no nested dissection) fills faster:
+ *     bytes = B0 + n (a_klu + c_klu sqrt n)                        (M.2)
+ * (21.6 KiB per particle at 959, 36.9 KiB at 5774; O(n^1.5) fill, the
+ * AMD bound for a 2-D grid).  Until drape 6fe1cdc the estimate was a flat
+ * 2 KiB per particle, 10-25 times too low (hang at 0.3 mm: 2 GiB
+ * estimated, 21 GB resident when killed).  Scenes above 8 GiB or 20
  * million particles are refused before anything is allocated.
  */
 #include "drape/scene.h"
@@ -28,8 +46,13 @@
 /* Lattice counting slack and memory limits (see the header comment). */
 #define SCENE_GRID_EPS 1e-9
 #define SCENE_PI 3.14159265358979323846
-#define SCENE_BYTES_PER_PARTICLE 2048.0
 #define SCENE_MAX_BYTES (8.0 * 1024.0 * 1024.0 * 1024.0)
+/* (M.1) and (M.2), bytes (see the header comment and docs/scenes.md). */
+#define SCENE_MEM_BASE (32.0 * 1024.0 * 1024.0)
+#define SCENE_MEM_LINEAR (6.0 * 1024.0)
+#define SCENE_MEM_FILL_LOG2 (1.25 * 1024.0)
+#define SCENE_MEM_KLU_LINEAR (12.0 * 1024.0)
+#define SCENE_MEM_KLU_FILL_SQRT (0.45 * 1024.0)
 #define SCENE_MAX_PARTICLES 2.0e7
 
 /* A length in SI, formatted in a readable unit ("18 cm", "2.5 mm"). */
@@ -242,32 +265,53 @@ double drape_scene_animate_step(const drape_scene *s, double *frame_s, int *subs
     return frame / n;
 }
 
-int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
-                                  drape_error *err)
+double drape_scene_memory_bytes(const drape_scene *s, drape_scene_mem_solver solver)
+{
+    double ni, nj, n;
+    grid_size(s, &ni, &nj, &n);
+    if (n < 2.0) n = 2.0;
+    if (solver == DRAPE_SCENE_MEM_KLU)
+        return SCENE_MEM_BASE + n * (SCENE_MEM_KLU_LINEAR + SCENE_MEM_KLU_FILL_SQRT * sqrt(n));
+    return SCENE_MEM_BASE + n * (SCENE_MEM_LINEAR + SCENE_MEM_FILL_LOG2 * log2(n));
+}
+
+int drape_scene_check_memory(const drape_scene *s, drape_scene_mem_solver solver,
+                             drape_error *err)
 {
     char msg[DRAPE_ERROR_MSG_MAX], a[32];
     double ni, nj, np, bytes;
+    const double gib = 1024.0 * 1024.0 * 1024.0;
+
+    /* Memory, estimated in double before anything is allocated. */
+    grid_size(s, &ni, &nj, &np);
+    bytes = drape_scene_memory_bytes(s, solver);
+    if (np > SCENE_MAX_PARTICLES || bytes > SCENE_MAX_BYTES) {
+        snprintf(msg, sizeof msg,
+                 "spacing %s gives ~%.2g particles, ~%.3g GiB at ~%.0f KiB "
+                 "per particle%s; the limit is %.0f million particles and "
+                 "%.0f GiB",
+                 fmt_len(s->spacing, a, sizeof a), np, bytes / gib,
+                 bytes / (np > 1.0 ? np : 1.0) / 1024.0,
+                 solver == DRAPE_SCENE_MEM_KLU ? " with --linear-solver klu" : "",
+                 SCENE_MAX_PARTICLES / 1e6, SCENE_MAX_BYTES / gib);
+        return pos_error(err, s, s->at_spacing, "spacing", DRAPE_E_NOMEM,
+                         msg);
+    }
+    return 0;
+}
+
+int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
+                                  drape_error *err)
+{
+    char msg[DRAPE_ERROR_MSG_MAX];
+    double ni, nj, np;
 
     if (!s || !f)
         return drape_error_set(err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                                "drape_scene_check_with_fabric: NULL argument");
     if (drape_scene_check_geometry(s, err)) return -1;
-
-    /* Memory, estimated in double before anything is allocated. */
+    if (drape_scene_check_memory(s, DRAPE_SCENE_MEM_CHOLMOD, err)) return -1;
     grid_size(s, &ni, &nj, &np);
-    bytes = np * SCENE_BYTES_PER_PARTICLE;
-    if (np > SCENE_MAX_PARTICLES || bytes > SCENE_MAX_BYTES) {
-        snprintf(msg, sizeof msg,
-                 "spacing %s gives ~%.2g particles, ~%.3g GiB at ~%.0f KiB "
-                 "per particle; the limit is %.0f million particles and "
-                 "%.0f GiB",
-                 fmt_len(s->spacing, a, sizeof a), np,
-                 bytes / (1024.0 * 1024.0 * 1024.0),
-                 SCENE_BYTES_PER_PARTICLE / 1024.0, SCENE_MAX_PARTICLES / 1e6,
-                 SCENE_MAX_BYTES / (1024.0 * 1024.0 * 1024.0));
-        return pos_error(err, s, s->at_spacing, "spacing", DRAPE_E_NOMEM,
-                         msg);
-    }
 
     /* Pins inside the bounding grid; -1 is the last index. */
     if (s->n_pins < 0 || s->n_pins > DRAPE_SCENE_MAX_PINS)

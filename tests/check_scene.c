@@ -14,7 +14,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/time.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "testutil.h"
@@ -966,25 +969,38 @@ START_TEST(test_memory_estimate)
     ck_assert_msg(strstr(e.msg, "spacing 1 um gives ~7.1e+10 particles") !=
                       NULL, "%s", buf);
 
-    /* 2 m x 2 m at 1 mm: 2001^2 = 4004001 particles x 2048 B = 8.20e9 B,
-     * under 8 GiB = 8.59e9 B: accepted. */
+    /* (M.1), B0 + n (6 KiB + 1.25 KiB log2 n), B0 = 32 MiB: a 50 cm x 50 cm
+     * cloth at 1 mm, 501^2 = 251001 particles, log2 n = 17.937:
+     * 33554432 + 251001 x (6144 + 1280 x 17.937) = 7.34e9 B, under
+     * 8 GiB = 8.59e9 B: accepted. */
     load_ok("scene: table\nfabric: @F\n"
-            "specimen: {width: 2 m, height: 2 m}\ntable: {side: 1 m}\n"
+            "specimen: {width: 50 cm, height: 50 cm}\ntable: {side: 30 cm}\n"
             "spacing: 1 mm\nend: {t_max: 5 s}\n", &s);
     drape_error_clear(&e);
     ck_assert_msg(drape_scene_check_with_fabric(&s, &f, &e) == 0, "%s",
                   drape_error_format(&e, buf, sizeof buf));
-    /* 2.1 m: 2101^2 = 4414201 x 2048 B = 9.04e9 B > 8 GiB: refused, at the
-     * spacing on line 5. */
+    /* 55 cm: 551^2 = 303601, log2 n = 18.212: 8.98e9 B > 8 GiB: refused,
+     * at the spacing on line 5.  (At the flat 2 KiB per particle of drape
+     * 6fe1cdc and before, 2 m x 2 m at 1 mm, 4.0 million particles, was
+     * accepted.) */
     load_ok("scene: table\nfabric: @F\n"
-            "specimen: {width: 2.1 m, height: 2.1 m}\ntable: {side: 1 m}\n"
+            "specimen: {width: 55 cm, height: 55 cm}\ntable: {side: 30 cm}\n"
             "spacing: 1 mm\nend: {t_max: 5 s}\n", &s);
     drape_error_clear(&e);
     ck_assert_int_eq(drape_scene_check_with_fabric(&s, &f, &e), -1);
     ck_assert_int_eq(e.kind, DRAPE_E_NOMEM);
     ck_assert_int_eq(e.line, 5);
     ck_assert_str_eq(e.key, "spacing");
-    ck_assert_msg(strstr(e.msg, "~4.4e+06 particles") != NULL, "%s", e.msg);
+    ck_assert_msg(strstr(e.msg, "~3e+05 particles") != NULL, "%s", e.msg);
+    ck_assert_msg(strstr(e.msg, "~8.36 GiB") != NULL, "%s", e.msg);
+    /* the review's case: hang (30 cm) at 0.3 mm, 1001^2 particles, was
+     * estimated at 2 GiB and grew past 21 GB: now refused */
+    load_ok("scene: hang\nfabric: @F\n"
+            "specimen: {width: 30 cm, height: 30 cm}\n"
+            "spacing: 0.3 mm\npins: [[0, -1], [-1, -1]]\nend: {t_max: 3 s}\n", &s);
+    drape_error_clear(&e);
+    ck_assert_int_eq(drape_scene_check_with_fabric(&s, &f, &e), -1);
+    ck_assert_int_eq(e.kind, DRAPE_E_NOMEM);
 
     /* A spacing changed after loading (as a --spacing option would) is
      * checked again: 50 cm is larger than the 20 cm height. */
@@ -1117,6 +1133,113 @@ START_TEST(test_fall_params)
 }
 END_TEST
 
+/* ------------------------------------------- memory estimate vs real runs */
+
+/* Run `drape run scenes/hang.yaml --spacing SPACING -q ARGS...` (at most
+ * 8 ARGS, NULL-terminated) as a child and return its peak resident memory
+ * in bytes as the kernel counted it (ru_maxrss, KiB on Linux);
+ * *status gets its exit status.  The run is meant to pass the memory check
+ * and reach its first factorisations, where its memory peaks (docs/scenes.md,
+ * "Memory"); exit status 4 (a --max-steps limit) is accepted. */
+static double child_peak_rss(const char *spacing, const char *const extra[], int *status)
+{
+    const char *args[16];
+    int k = 0;
+    args[k++] = "run";
+    args[k++] = tu_src("scenes/hang.yaml");
+    args[k++] = "--spacing";
+    args[k++] = spacing;
+    args[k++] = "-q";
+    for (int i = 0; extra[i] && k < 15; i++) args[k++] = extra[i];
+    args[k] = NULL;
+    /* getrusage(RUSAGE_CHILDREN) is the largest over every reaped child:
+     * an intermediate process of its own per run keeps runs apart (wait4
+     * is not POSIX) */
+    int fd[2];
+    long rep[2] = {-1, 0}; /* exit status (-1: killed), ru_maxrss KiB */
+    ck_assert_int_eq(pipe(fd), 0);
+    pid_t mid = fork();
+    ck_assert_msg(mid >= 0, "fork failed");
+    if (mid == 0) {
+        close(fd[0]);
+        pid_t pid = tu_spawn_drape(args, NULL, NULL, 0);
+        int st = 0;
+        struct rusage ru;
+        long r[2] = {-1, 0};
+        if (waitpid(pid, &st, 0) == pid && WIFEXITED(st)) r[0] = WEXITSTATUS(st);
+        if (getrusage(RUSAGE_CHILDREN, &ru) == 0) r[1] = ru.ru_maxrss;
+        _exit(write(fd[1], r, sizeof r) == (ssize_t)sizeof r ? 0 : 1);
+    }
+    close(fd[1]);
+    ssize_t got = read(fd[0], rep, sizeof rep);
+    close(fd[0]);
+    int st = 0;
+    ck_assert_msg(waitpid(mid, &st, 0) == mid && WIFEXITED(st) && WEXITSTATUS(st) == 0 &&
+                      got == (ssize_t)sizeof rep,
+                  "could not measure drape run --spacing %s", spacing);
+    ck_assert_msg(rep[0] >= 0, "drape run --spacing %s was killed", spacing);
+    *status = (int)rep[0];
+    return (double)rep[1] * 1024.0;
+}
+
+/* The estimate of the hang scene at a spacing (the test's own loading of
+ * the shipped scene, as drape run does before it allocates). */
+static double hang_estimate(double spacing, drape_scene_mem_solver solver)
+{
+    drape_scene s;
+    drape_error e;
+    char buf[1024];
+    drape_error_clear(&e);
+    ck_assert_msg(drape_scene_load(tu_src("scenes/hang.yaml"), &s, &e, NULL, NULL) == 0, "%s",
+                  drape_error_format(&e, buf, sizeof buf));
+    s.spacing = spacing;
+    return drape_scene_memory_bytes(&s, solver);
+}
+
+/* The estimate must bound the peak RSS the kernel measured for a real run
+ * (the review's case: hang at 0.3 mm estimated at 2 GiB grew past 21 GB),
+ * and not by more than a factor 2 (an estimate that refuses runs that fit
+ * is no better).  Cheap sizes, the methods whose peaks differ most:
+ * dynamic cvode-bdf (the scene's, at two sizes: the estimate's growth
+ * with the fill-in) and auto (CVODE and ARKODE both allocated), animate
+ * and static on CHOLMOD; dynamic with KLU against the KLU estimate.  Before the fix (a flat 2 KiB per particle) the 4 mm
+ * estimate was 11.3 MiB against a measured 125 MiB. */
+START_TEST(test_memory_estimate_bounds_rss)
+{
+    static const struct {
+        const char *spacing;
+        double spacing_m;
+        drape_scene_mem_solver solver;
+        const char *args[8];
+    } runs[] = {
+        {"4mm", 0.004, DRAPE_SCENE_MEM_CHOLMOD, {"--max-steps", "3", NULL}},
+        {"3mm", 0.003, DRAPE_SCENE_MEM_CHOLMOD, {"--max-steps", "3", NULL}},
+        {"4mm", 0.004, DRAPE_SCENE_MEM_CHOLMOD, {"--max-steps", "3", "--integrator", "auto", NULL}},
+        {"4mm", 0.004, DRAPE_SCENE_MEM_CHOLMOD, {"--method", "animate", "--t-max", "0.07s", NULL}},
+        {"1cm", 0.01, DRAPE_SCENE_MEM_CHOLMOD, {"--method", "static", NULL}},
+        {"7mm", 0.007, DRAPE_SCENE_MEM_KLU,
+         {"--max-steps", "3", "--linear-solver", "klu", NULL}},
+    };
+    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
+        int status = -1;
+        double rss = child_peak_rss(runs[i].spacing, runs[i].args, &status);
+        double est = hang_estimate(runs[i].spacing_m, runs[i].solver);
+        ck_assert_msg(status == 0 || status == 4, "hang --spacing %s %s: exit %d",
+                      runs[i].spacing, runs[i].args[1], status);
+        ck_assert_msg(rss > 0.0, "no ru_maxrss");
+        ck_assert_msg(est >= rss,
+                      "hang --spacing %s %s %s: estimate %.17g B below the measured peak RSS "
+                      "%.17g B",
+                      runs[i].spacing, runs[i].args[0], runs[i].args[1], est, rss);
+        ck_assert_msg(est <= 2.0 * rss,
+                      "hang --spacing %s %s %s: estimate %.17g B above twice the measured "
+                      "peak RSS %.17g B",
+                      runs[i].spacing, runs[i].args[0], runs[i].args[1], est, rss);
+    }
+}
+END_TEST
+
+
 Suite *scene_suite(void)
 {
     Suite *s = suite_create("scene");
@@ -1153,6 +1276,12 @@ Suite *scene_suite(void)
     tcase_add_checked_fixture(tc, setup, NULL);
     tcase_add_test(tc, test_pins_in_lattice);
     tcase_add_test(tc, test_memory_estimate);
+    suite_add_tcase(s, tc);
+
+    /* child runs of drape (a few seconds each) */
+    tc = tcase_create("memory");
+    tcase_set_timeout(tc, 60);
+    tcase_add_test(tc, test_memory_estimate_bounds_rss);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -211,6 +211,32 @@ int drape_scene_check_geometry(const drape_scene *s, drape_error *err);
 int drape_scene_check_with_fabric(const drape_scene *s, const drape_fabric *f,
                                   drape_error *err);
 
+/* The linear solvers whose memory the estimate tells apart: CHOLMOD's
+ * (every method's default: the Schur system of the dynamic and animate
+ * runs, the static solver's Hessian) and KLU's LU of the first-order
+ * Jacobian (--linear-solver klu), whose fill grows faster. */
+typedef enum drape_scene_mem_solver {
+    DRAPE_SCENE_MEM_CHOLMOD = 0,
+    DRAPE_SCENE_MEM_KLU = 1
+} drape_scene_mem_solver;
+
+/* Estimated peak resident memory of one run (one process) of the scene,
+ * in bytes, before anything is allocated (scene_check.c, docs/scenes.md,
+ * "Memory"): an upper bound, over every method and integrator, of the
+ * measured peak RSS, for the particle count n of the lattice:
+ *     bytes = B0 + n (a + c log2 n)          (CHOLMOD: nested-dissection fill)
+ *     bytes = B0 + n (a_klu + c_klu sqrt n)  (KLU: AMD fill of the 6 nf system)
+ * The count is the scene's (ni x nj, pi (d/2s)^2 for a circle). */
+double drape_scene_memory_bytes(const drape_scene *s, drape_scene_mem_solver solver);
+
+/* Refuse (DRAPE_E_NOMEM at the spacing key, exit 5) a scene whose
+ * estimated memory with this solver (drape_scene_memory_bytes) is above
+ * 8 GiB or whose lattice has over 20 million particles.
+ * drape_scene_check_with_fabric runs it with DRAPE_SCENE_MEM_CHOLMOD;
+ * drape run again with KLU when --linear-solver klu is given. */
+int drape_scene_check_memory(const drape_scene *s, drape_scene_mem_solver solver,
+                             drape_error *err);
+
 /* The fall method's time and step (solver.fall_time, fall_step, or their
  * defaults from the scene's geometry; docs/ensemble.md):
  *     t_fall = DRAPE_FALL_TIME_FACTOR sqrt(h / g),
