@@ -20,6 +20,7 @@
  */
 #include "drape/output.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -27,11 +28,21 @@
 #include <cairo.h>
 #include <librsvg/rsvg.h>
 
-/* cairo's PNG writer hands the encoded bytes here. */
+/* cairo's PNG writer hands the encoded bytes here; a failed write keeps
+ * its errno for the message (cairo's own says only "error while writing
+ * to output stream"). */
+typedef struct png_out {
+    FILE *f;
+    int errnum;
+} png_out;
+
 static cairo_status_t png_sink(void *closure, const unsigned char *data, unsigned int len)
 {
-    FILE *f = closure;
-    return fwrite(data, 1, len, f) == len ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+    png_out *o = closure;
+    errno = 0;
+    if (fwrite(data, 1, len, o->f) == len) return CAIRO_STATUS_SUCCESS;
+    if (!o->errnum) o->errnum = errno ? errno : EIO;
+    return CAIRO_STATUS_WRITE_ERROR;
 }
 
 int drape_png_from_svg(const char *svg, size_t len, FILE *f, const char *path, drape_error *err)
@@ -81,10 +92,11 @@ int drape_png_from_svg(const char *svg, size_t len, FILE *f, const char *path, d
         goto out;
     }
     cairo_surface_flush(s);
-    cairo_status_t st = cairo_surface_write_to_png_stream(s, png_sink, f);
+    png_out o = {f, 0};
+    cairo_status_t st = cairo_surface_write_to_png_stream(s, png_sink, &o);
     if (st != CAIRO_STATUS_SUCCESS) {
         drape_error_set(err, DRAPE_E_IO, path, 0, 0, NULL, "cannot write: %s",
-                        cairo_status_to_string(st));
+                        o.errnum ? strerror(o.errnum) : cairo_status_to_string(st));
         goto out;
     }
     rc = 0;

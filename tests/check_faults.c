@@ -171,6 +171,9 @@ START_TEST(test_disk_full_while_writing_shadow)
 {
     assert_full_disk_leaves_nothing("run ../scenes/cusick.yaml --spacing 3cm --specimens 1 -q", 200,
                                     "shadow.png", "full-shadow");
+    /* with the reason (cairo's own message was "error while writing to
+     * output stream") */
+    ck_assert_msg(strstr(err, strerror(EFBIG)) != NULL, "message without the reason: %s", err);
     ck_assert_int_eq(count_files(new_dir("roomy-full-shadow"), "shadow.png"), 1);
 }
 END_TEST
