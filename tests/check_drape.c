@@ -355,6 +355,121 @@ START_TEST(test_dc_lattice_overlaps)
 }
 END_TEST
 
+/* The far exit t >= 0 of the ray c + t u from triangle tri (6 numbers), or
+ * -1 if the ray misses it: the ray's parameter interval inside each of the
+ * three half-planes, intersected (independent of GEOS). */
+static double ray_exit(double cx, double cy, double ux, double uy, const double *tri)
+{
+    double o = (tri[2] - tri[0]) * (tri[5] - tri[1]) - (tri[3] - tri[1]) * (tri[4] - tri[0]);
+    double sg = o > 0 ? 1.0 : -1.0, lo = 0.0, hi = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        const double *a = tri + 2 * k, *b = tri + 2 * ((k + 1) % 3);
+        double ex = b[0] - a[0], ey = b[1] - a[1];
+        double f0 = sg * (ex * (cy - a[1]) - ey * (cx - a[0])); /* inside: f0 + t f1 >= 0 */
+        double f1 = sg * (ex * uy - ey * ux);
+        if (f1 == 0.0) {
+            if (f0 < 0.0) return -1.0;
+            continue;
+        }
+        double t = -f0 / f1;
+        if (f1 > 0.0) lo = t > lo ? t : lo;
+        else hi = t < hi ? t : hi;
+    }
+    return lo <= hi ? hi : -1.0;
+}
+
+/* par[1]: disk radius, par[2]: tolerance, par[4]: the disk's centre x */
+static int in_disk_offset(double x, double y, const double *par)
+{
+    return (x - par[4]) * (x - par[4]) + y * y <= par[1] * par[1] + par[2];
+}
+
+/* r(theta) on shadows that are not star-shaped about the centre (a
+ * swirl: rays leave and re-enter it), on overlapping folds, and about a
+ * centre off the specimen's middle, against each ray cast through every
+ * face's four triangles about its corner mean (drape.c's faces) and the
+ * farthest exit taken: the farthest point of the union along the ray, which
+ * is on its exterior ring.  r_min, r_max (exact: the farthest exterior
+ * vertex) and the centre follow. */
+START_TEST(test_dc_rays_independent)
+{
+    static double par[5];
+    const double R = 0.15, sigma = 0.01;
+    for (int c = 0; c < 4; c++) {
+        par[0] = R; par[1] = 0.05; par[2] = 1e-9 * sigma * sigma; par[3] = 0.0;
+        par[4] = c == 3 ? 0.04 : 0.0; /* an offset support disk: the rays' centre moves */
+        int h = (int)floor(R / sigma + 1e-9);
+        drape_lattice *L = tl_new(2 * h + 1, 2 * h + 1, sigma, -h * sigma, -h * sigma, 0,
+                                  in_circle, in_disk_offset, par);
+        double *x = tl_copy_x0(L);
+        for (int i = 0; i < L->n; i++) {
+            double X = L->x0[3 * i], Y = L->x0[3 * i + 1], r = hypot(X, Y), ph = atan2(Y, X);
+            if (c == 0 || c == 3) { /* swirl: the angle turns with r^2 (1.7 turns at the hem) */
+                double a = 25.0 * r * r / R;
+                X = r * cos(ph + a);
+                Y = r * sin(ph + a);
+            } else { /* seven folds pushed sideways over each other, with ripples */
+                double f = r > 0.05 ? 0.7 : 1.0, d = r > 0.05 ? 0.6 * (r - 0.05) * sin(7 * ph) : 0;
+                double nx = c == 2 ? 0.004 * sin(50 * X) : 0.0, ny = c == 2 ? 0.004 * cos(40 * Y) : 0.0;
+                X = f * r * cos(ph) - d * sin(ph) + nx;
+                Y = f * r * sin(ph) + d * cos(ph) + ny;
+            }
+            x[3 * i] = X;
+            x[3 * i + 1] = Y;
+            x[3 * i + 2] = -0.01 * r;
+        }
+        drape_error err;
+        drape_error_clear(&err);
+        drape_dc *d = drape_dc_new(L, NULL, &err);
+        ck_assert_ptr_nonnull(d);
+        drape_shadow sh;
+        ck_assert_int_eq(drape_dc_measure(d, x, &sh, &err), 0);
+        ck_assert_close_abs(sh.centre_m[0], par[4], 1e-12);
+        ck_assert_close_abs(sh.centre_m[1], 0.0, 1e-12);
+        int na = 0, nq = 0;
+        const double *rad = drape_dc_radii(d, &na);
+        int *q = drape_quads_new(L, &nq, &err);
+        ck_assert(rad && na >= 8 && q && nq > 0);
+        double rmin = INFINITY, vmax = 0.0;
+        for (int a = 0; a < na; a++) {
+            double th = 2.0 * M_PI * a / na, ux = cos(th), uy = sin(th), best = 0.0;
+            int exits = 0;
+            for (int k = 0; k < nq; k++) {
+                double p[8], mx = 0.0, my = 0.0;
+                for (int v = 0; v < 4; v++) {
+                    p[2 * v] = x[3 * q[4 * k + v]];
+                    p[2 * v + 1] = x[3 * q[4 * k + v] + 1];
+                    mx += p[2 * v] / 4;
+                    my += p[2 * v + 1] / 4;
+                }
+                for (int v = 0; v < 4; v++) {
+                    int w = (v + 1) % 4;
+                    double tri[6] = {p[2 * v], p[2 * v + 1], p[2 * w], p[2 * w + 1], mx, my};
+                    double o = (tri[2] - tri[0]) * (tri[5] - tri[1]) - (tri[3] - tri[1]) * (tri[4] - tri[0]);
+                    if (fabs(o) < 1e-14) continue;
+                    double t = ray_exit(sh.centre_m[0], sh.centre_m[1], ux, uy, tri);
+                    exits += t >= 0.0;
+                    if (t > best) best = t;
+                }
+            }
+            ck_assert_msg(fabs(best - rad[a]) <= 1e-12, "case %d ray %d: r %.15g, cast %.15g", c, a,
+                          rad[a], best);
+            rmin = fmin(rmin, best);
+            ck_assert_msg(exits > 0, "case %d ray %d meets no face", c, a);
+        }
+        for (int i = 0; i < L->n; i++)
+            vmax = fmax(vmax, hypot(x[3 * i] - sh.centre_m[0], x[3 * i + 1] - sh.centre_m[1]));
+        ck_assert_close_abs(sh.r_min_m, rmin, 1e-12);
+        ck_assert_msg(sh.r_max_m <= vmax + 1e-12 && sh.r_max_m >= rmin, "case %d r_max %g", c,
+                      sh.r_max_m);
+        drape_free(q);
+        drape_free(x);
+        drape_dc_free(d);
+        tl_free(L);
+    }
+}
+END_TEST
+
 START_TEST(test_quads_orientation)
 {
     /* warp-strip layout: i along y, j along x */
@@ -528,6 +643,7 @@ Suite *drape_suite(void)
     tcase_add_test(tc, test_dc_circle_hanging);
     tcase_add_test(tc, test_union_nonconvex);
     tcase_add_test(tc, test_dc_lattice_overlaps);
+    tcase_add_test(tc, test_dc_rays_independent);
     tcase_add_test(tc, test_quads_orientation);
     tcase_add_test(tc, test_dc_alloc_failures);
     tcase_add_test(tc, test_nodes_samples);
