@@ -376,17 +376,15 @@ static int usage_error(const char *fmt, const char *a)
     return drape_error_exit_status(DRAPE_E_USAGE);
 }
 
-/* Unique, file-name-safe name from the fabric file name. */
-static void make_name(batch *b, int k)
+/* The file-name-safe stem of a fabric file name (NAME before -2, -3). */
+static void base_name(const char *fabric, char nm[BATCH_NAME_MAX + 1])
 {
-    job *jb = &b->jobs[k];
-    const char *base = strrchr(jb->fabric, '/');
-    base = base ? base + 1 : jb->fabric;
+    const char *base = strrchr(fabric, '/');
+    base = base ? base + 1 : fabric;
     size_t n = strlen(base);
     if (n > 5 && strcmp(base + n - 5, ".yaml") == 0) n -= 5;
     else if (n > 4 && strcmp(base + n - 4, ".yml") == 0) n -= 4;
     if (n > BATCH_NAME_MAX) n = BATCH_NAME_MAX;
-    char nm[BATCH_NAME_MAX + 1];
     for (size_t i = 0; i < n; i++) {
         char c = base[i];
         int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
@@ -394,14 +392,63 @@ static void make_name(batch *b, int k)
         nm[i] = ok ? c : '_';
     }
     nm[n] = 0;
-    if (!n) snprintf(nm, sizeof nm, "fabric");
+    if (!n) snprintf(nm, BATCH_NAME_MAX + 1, "fabric");
+}
+
+/* 1 if name is job k's to take: no other named job has it (named[i], or
+ * every job before k when named is NULL) and, on --resume, no row of
+ * another fabric file was made under it (inputs.sum). */
+static int name_free(const batch *b, int k, const unsigned char *named, const char *name)
+{
+    for (int i = 0; i < b->n; i++)
+        if (i != k && (named ? named[i] : i < k) && strcmp(b->jobs[i].name, name) == 0) return 0;
+    for (int i = 0; i < b->n_old; i++)
+        if (b->old_name[i] && strcmp(b->old_name[i], name) == 0 &&
+            strcmp(b->old_file[i], b->jobs[k].fabric) != 0)
+            return 0;
+    return 1;
+}
+
+/* Job k's NAME: its base name, then -2, -3, ... until free. */
+static void make_name(batch *b, int k, const unsigned char *named)
+{
+    job *jb = &b->jobs[k];
+    char nm[BATCH_NAME_MAX + 1];
+    base_name(jb->fabric, nm);
     snprintf(jb->name, sizeof jb->name, "%s", nm);
-    for (int dup = 2;; dup++) {
-        int clash = 0;
-        for (int i = 0; i < k && !clash; i++) clash = strcmp(b->jobs[i].name, jb->name) == 0;
-        if (!clash) break;
+    for (int dup = 2; !name_free(b, k, named, jb->name); dup++)
         snprintf(jb->name, sizeof jb->name, "%s-%d", nm, dup);
+}
+
+/* On --resume (inputs.sum read): a fabric whose row was made under a NAME
+ * keeps it, so that its logs and frames are its own whatever the order of
+ * the new command line; the others take theirs around every NAME kept or
+ * recorded.  Before, NAMEs followed the command line's order alone, and a
+ * new d2/a.yaml listed before a done d1/a.yaml took `a` and wrote over
+ * d1/a.yaml's frames/a and logs/a.*.  Returns -1 out of memory. */
+static int keep_names(batch *b)
+{
+    unsigned char *named = drape_calloc(b->n > 0 ? (size_t)b->n : 1, 1);
+    if (!named) return -1;
+    for (int k = 0; k < b->n; k++) {
+        const char *old = drape_cli_batch_old_name(b, b->jobs[k].fabric);
+        if (!old || strlen(old) >= sizeof b->jobs[k].name ||
+            strspn(old, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") !=
+                strlen(old) || old[0] == '.')
+            continue;
+        int clash = 0;
+        for (int i = 0; i < k && !clash; i++) clash = named[i] && strcmp(b->jobs[i].name, old) == 0;
+        if (clash) continue;
+        snprintf(b->jobs[k].name, sizeof b->jobs[k].name, "%s", old);
+        named[k] = 1;
     }
+    for (int k = 0; k < b->n; k++)
+        if (!named[k]) {
+            make_name(b, k, named);
+            named[k] = 1;
+        }
+    drape_free(named);
+    return 0;
 }
 
 int drape_cli_batch(int argc, char **argv)
@@ -539,7 +586,7 @@ int drape_cli_batch(int argc, char **argv)
             goto fail;
         }
         b.jobs[b.n].fabric = f;
-        make_name(&b, b.n);
+        make_name(&b, b.n, NULL);
         b.n++;
     }
 
@@ -556,7 +603,9 @@ int drape_cli_batch(int argc, char **argv)
     }
     for (int k = 0; k < b.n; k++) b.jobs[k].sum = drape_cli_batch_file_sum(b.jobs[k].fabric);
     if (drape_cli_batch_check_stamp(&b, resume, &err) != 0) goto fail;
-    if (resume && (drape_cli_batch_read_sums(&b, &err) != 0 || drape_cli_batch_load_previous(&b, &err) != 0)) goto fail;
+    if (resume && drape_cli_batch_read_sums(&b, &err) != 0) goto fail;
+    if (resume && keep_names(&b) != 0) goto nomem;
+    if (resume && drape_cli_batch_load_previous(&b, &err) != 0) goto fail;
     /* a fabric without a row whose run was stopped when the batch was
      * killed outright (its row only in logs/NAME.csv) continues from its
      * checkpoint or manifest, as an interrupted row's run does, if they

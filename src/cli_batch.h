@@ -59,6 +59,7 @@ typedef struct batch {
      * their rows were made (fabric_file as in results.csv) */
     char **old_file;
     unsigned long long *old_sum;
+    char **old_name;             /* its NAME then (NULL: a file of before) */
     int n_old;
     int n_done, n_bad, n_running;
     char results[BATCH_PATH_MAX];
@@ -85,6 +86,8 @@ int drape_cli_batch_write_results(const batch *b, drape_error *err);
 int drape_cli_batch_check_stamp(const batch *b, int resume, drape_error *err);
 /* --resume: read DIR/inputs.sum, then DIR/results.csv */
 int drape_cli_batch_read_sums(batch *b, drape_error *err);
+/* the NAME recorded in inputs.sum for a row's fabric_file (NULL: none) */
+const char *drape_cli_batch_old_name(const batch *b, const char *fabric_file);
 int drape_cli_batch_load_previous(batch *b, drape_error *err);
 /* free what the record functions allocated (b itself is the caller's) */
 void drape_cli_batch_free_record(batch *b);

@@ -100,8 +100,18 @@ static unsigned long long old_sum_of(const batch *b, const char *field)
     return 0;
 }
 
-/* DIR/inputs.sum: "SUM<TAB>fabric_file" for every row, so that --resume
- * can tell a fabric file edited since its row was made */
+const char *drape_cli_batch_old_name(const batch *b, const char *fabric_file)
+{
+    for (int i = 0; i < b->n_old; i++)
+        if (strcmp(b->old_file[i], fabric_file) == 0) return b->old_name[i];
+    return NULL;
+}
+
+/* DIR/inputs.sum: "SUM:NAME<TAB>fabric_file" for every row, so that
+ * --resume can tell a fabric file edited since its row was made, and can
+ * give the fabric the NAME (logs/NAME.*, frames/NAME/) its row was made
+ * under.  (Before the thirtieth session "SUM<TAB>fabric_file": still read;
+ * an older drape reads the new lines' SUM and stops at the colon.) */
 static int write_sums(const batch *b, drape_error *err)
 {
     char path[BATCH_PATH_MAX + 16];
@@ -119,7 +129,9 @@ static int write_sums(const batch *b, drape_error *err)
         const job *jb = k < b->n ? &b->jobs[k] : NULL;
         unsigned long long h = jb && jb->state == JOB_DONE ? jb->sum
                                                           : old_sum_of(b, row[COL_FILE]);
-        if (h) fprintf(a.f, "%016llx\t%s\n", h, row[COL_FILE]);
+        const char *nm = jb ? jb->name : drape_cli_batch_old_name(b, row[COL_FILE]);
+        if (h && nm) fprintf(a.f, "%016llx:%s\t%s\n", h, nm, row[COL_FILE]);
+        else if (h) fprintf(a.f, "%016llx\t%s\n", h, row[COL_FILE]);
     }
     return drape_cli_afile_commit(&a, err);
 }
@@ -139,11 +151,20 @@ int drape_cli_batch_read_sums(batch *b, drape_error *err)
         if (!tab) continue;
         *tab = 0;
         char **nf = drape_realloc(b->old_file, (size_t)(b->n_old + 1) * sizeof *nf);
+        if (nf) b->old_file = nf;
         unsigned long long *ns = nf ? drape_realloc(b->old_sum, (size_t)(b->n_old + 1) * sizeof *ns)
                                     : NULL;
-        if (nf) b->old_file = nf;
         if (ns) b->old_sum = ns;
-        if (!nf || !ns || !(b->old_file[b->n_old] = drape_strdup(tab + 1))) {
+        char **nn = ns ? drape_realloc(b->old_name, (size_t)(b->n_old + 1) * sizeof *nn) : NULL;
+        if (nn) b->old_name = nn;
+        char *colon = strchr(line, ':');
+        if (!nn || !(b->old_file[b->n_old] = drape_strdup(tab + 1))) {
+            rc = drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
+            break;
+        }
+        b->old_name[b->n_old] = NULL;
+        if (colon && colon[1] && !(b->old_name[b->n_old] = drape_strdup(colon + 1))) {
+            drape_free(b->old_file[b->n_old]);
             rc = drape_error_set(err, DRAPE_E_NOMEM, path, 0, 0, NULL, "out of memory");
             break;
         }
@@ -383,7 +404,11 @@ void drape_cli_batch_free_record(batch *b)
     for (int k = 0; k < b->n; k++) drape_cli_batch_row_free(b->jobs[k].row);
     for (int k = 0; k < b->n_extra; k++) drape_cli_batch_row_free(b->extra[k]);
     drape_free(b->extra);
-    for (int k = 0; k < b->n_old; k++) drape_free(b->old_file[k]);
+    for (int k = 0; k < b->n_old; k++) {
+        drape_free(b->old_file[k]);
+        drape_free(b->old_name[k]);
+    }
     drape_free(b->old_file);
+    drape_free(b->old_name);
     drape_free(b->old_sum);
 }

@@ -943,6 +943,62 @@ START_TEST(test_resume_swapped_names)
 }
 END_TEST
 
+/* NAMEs followed the command line's order alone: a --resume listing a new
+ * d2/a.yaml before the done d1/a.yaml gave the new fabric NAME a, and its
+ * run wrote over d1/a.yaml's frames/a and logs/a.* (found by the batch
+ * review).  A fabric whose row was made under a NAME keeps it (recorded
+ * in inputs.sum); the new one takes a-2. */
+START_TEST(test_resume_keeps_names)
+{
+    const char *dir = subdir("kept-names");
+    char d1[1024], d2[1024], cmd[8192], f1[1100], f2[1100], frame[1200], log[1200];
+    snprintf(d1, sizeof d1, "%s/kn1", tu_scratch_dir());
+    snprintf(d2, sizeof d2, "%s/kn2", tu_scratch_dir());
+    snprintf(f1, sizeof f1, "%s/a.yaml", d1);
+    snprintf(f2, sizeof f2, "%s/a.yaml", d2);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s %s && cp %s %s && cp %s %s", d1, d2, COTTON, f1,
+             DENIM, f2);
+    ck_assert_int_eq(system(cmd), 0);
+    snprintf(cmd, sizeof cmd, "batch -q %s %s --spacing 5cm --t-max 0.1s --frames --out %s",
+             SCENE, f1, dir);
+    ck_assert_msg(tu_run_drape(cmd, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(frame, sizeof frame, "%s/frames/a/frame_000000.obj", dir);
+    snprintf(log, sizeof log, "%s/logs/a.csv", dir);
+    struct stat f_before, l_before, f_after, l_after;
+    ck_assert_int_eq(stat(frame, &f_before), 0);
+    ck_assert_int_eq(stat(log, &l_before), 0);
+    snprintf(cmd, sizeof cmd, "batch -q %s %s %s --spacing 5cm --t-max 0.1s --frames --out %s "
+             "--resume", SCENE, f2, f1, dir);
+    ck_assert_msg(tu_run_drape(cmd, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_int_eq(stat(frame, &f_after), 0);
+    ck_assert_int_eq(stat(log, &l_after), 0);
+    ck_assert_msg(f_before.st_ino == f_after.st_ino && l_before.st_ino == l_after.st_ino &&
+                      l_before.st_mtime == l_after.st_mtime,
+                  "the done fabric's frames/a or logs/a.csv were written over");
+    ck_assert(has_log(dir, "a-2"));
+    snprintf(cmd, sizeof cmd, "grep -q denim-wang '%s'", log);
+    ck_assert_msg(system(cmd) != 0, "logs/a.csv holds the new fabric's row");
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    for (int r = 0; r < 2; r++) {
+        const char *file = cell(t, r, "fabric_file"), *name = cell(t, r, "fabric");
+        ck_assert_str_eq(cell(t, r, "status"), "t_max");
+        ck_assert_msg(strcmp(name, strstr(file, "/kn1/") ? "cotton-breen" : "denim-wang") == 0,
+                      "%s: row of %s", file, name);
+    }
+    free(t);
+    /* the names stay through a further --resume in yet another order */
+    snprintf(cmd, sizeof cmd, "batch -q %s %s %s --spacing 5cm --t-max 0.1s --frames --out %s "
+             "--resume", SCENE, f1, f2, dir);
+    ck_assert_msg(tu_run_drape(cmd, out, CAP, err, CAP) == 0, "%s", err);
+    snprintf(cmd, sizeof cmd, "grep -q '^[0-9a-f]*:a-2\t%s$' '%s/inputs.sum' && "
+             "grep -q '^[0-9a-f]*:a\t%s$' '%s/inputs.sum'", f2, dir, f1, dir);
+    ck_assert_msg(system(cmd) == 0, "inputs.sum does not record the NAMEs");
+}
+END_TEST
+
 START_TEST(test_interrupted_row_resumed)
 {
     const char *dir = subdir("interrupted");
@@ -1026,6 +1082,7 @@ Suite *batch_suite(void)
     tcase_add_test(tc, test_bad_corpus);
     tcase_add_test(tc, test_interrupted_row_resumed);
     tcase_add_test(tc, test_resume_swapped_names);
+    tcase_add_test(tc, test_resume_keeps_names);
     tcase_add_test(tc, test_killed_batch_stops_runs);
     tcase_add_test(tc, test_killed_batch_resumed);
     tcase_add_test(tc, test_resume_ensemble_row);
