@@ -901,6 +901,35 @@ START_TEST(test_resume_ensemble_row)
 }
 END_TEST
 
+/* Cotton as SCRATCH/sub1/a.yaml (f1) and denim as SCRATCH/sub2/a.yaml (f2):
+ * two fabrics of one file name, so of one NAME stem. */
+static void two_fabrics_named_a(const char *sub1, const char *sub2, char f1[1100], char f2[1100])
+{
+    char cmd[4096];
+    snprintf(f1, 1100, "%s/%s/a.yaml", tu_scratch_dir(), sub1);
+    snprintf(f2, 1100, "%s/%s/a.yaml", tu_scratch_dir(), sub2);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s/%s %s/%s && cp %s %s && cp %s %s", tu_scratch_dir(),
+             sub1, tu_scratch_dir(), sub2, COTTON, f1, DENIM, f2);
+    ck_assert_int_eq(system(cmd), 0);
+}
+
+/* dir's results.csv has the two rows of two_fabrics_named_a, both t_max,
+ * each the run of its own file (cotton's the one under cotton_dir). */
+static void assert_rows_of_a(const char *dir, const char *cotton_dir)
+{
+    table *t = malloc(sizeof *t);
+    ck_assert_ptr_nonnull(t);
+    load_table(dir, t);
+    ck_assert_int_eq(t->nrow, 2);
+    for (int r = 0; r < 2; r++) {
+        const char *file = cell(t, r, "fabric_file"), *name = cell(t, r, "fabric");
+        ck_assert_str_eq(cell(t, r, "status"), "t_max");
+        ck_assert_msg(strcmp(name, strstr(file, cotton_dir) ? "cotton-breen" : "denim-wang") == 0,
+                      "%s: row of %s", file, name);
+    }
+    free(t);
+}
+
 /* Two fabrics with one file name in two directories get the frame
  * directories a and a-2 in command-line order; a --resume that lists them
  * the other way round continued each from the other's checkpoint (rows
@@ -908,14 +937,8 @@ END_TEST
 START_TEST(test_resume_swapped_names)
 {
     const char *dir = subdir("swapped");
-    char d1[1024], d2[1024], cmd[8192], f1[1100], f2[1100], w1[1200], w2[1200];
-    snprintf(d1, sizeof d1, "%s/d1", tu_scratch_dir());
-    snprintf(d2, sizeof d2, "%s/d2", tu_scratch_dir());
-    snprintf(f1, sizeof f1, "%s/a.yaml", d1);
-    snprintf(f2, sizeof f2, "%s/a.yaml", d2);
-    snprintf(cmd, sizeof cmd, "mkdir -p %s %s && cp %s %s && cp %s %s", d1, d2, COTTON, f1,
-             DENIM, f2);
-    ck_assert_int_eq(system(cmd), 0);
+    char cmd[8192], f1[1100], f2[1100], w1[1200], w2[1200];
+    two_fabrics_named_a("d1", "d2", f1, f2);
     snprintf(w1, sizeof w1, "%s/frames/a/frame_000001.obj", dir);
     snprintf(w2, sizeof w2, "%s/frames/a-2/frame_000001.obj", dir);
     const char *const a[] = {"batch", "-q", SCENE, f1, f2, "--spacing", "5cm", "--t-max",
@@ -929,17 +952,7 @@ START_TEST(test_resume_swapped_names)
     snprintf(cmd, sizeof cmd, "batch -q %s %s %s --spacing 5cm --t-max 0.3s -j 2 --frames "
              "--out %s --resume", SCENE, f2, f1, dir);
     ck_assert_msg(tu_run_drape(cmd, out, CAP, err, CAP) == 0, "%s", err);
-    table *t = malloc(sizeof *t);
-    ck_assert_ptr_nonnull(t);
-    load_table(dir, t);
-    ck_assert_int_eq(t->nrow, 2);
-    for (int r = 0; r < 2; r++) {
-        const char *file = cell(t, r, "fabric_file"), *name = cell(t, r, "fabric");
-        ck_assert_str_eq(cell(t, r, "status"), "t_max");
-        ck_assert_msg(strcmp(name, strstr(file, "/d1/") ? "cotton-breen" : "denim-wang") == 0,
-                      "%s: row of %s", file, name);
-    }
-    free(t);
+    assert_rows_of_a(dir, "/d1/");
 }
 END_TEST
 
@@ -951,14 +964,8 @@ END_TEST
 START_TEST(test_resume_keeps_names)
 {
     const char *dir = subdir("kept-names");
-    char d1[1024], d2[1024], cmd[8192], f1[1100], f2[1100], frame[1200], log[1200];
-    snprintf(d1, sizeof d1, "%s/kn1", tu_scratch_dir());
-    snprintf(d2, sizeof d2, "%s/kn2", tu_scratch_dir());
-    snprintf(f1, sizeof f1, "%s/a.yaml", d1);
-    snprintf(f2, sizeof f2, "%s/a.yaml", d2);
-    snprintf(cmd, sizeof cmd, "mkdir -p %s %s && cp %s %s && cp %s %s", d1, d2, COTTON, f1,
-             DENIM, f2);
-    ck_assert_int_eq(system(cmd), 0);
+    char cmd[8192], f1[1100], f2[1100], frame[1200], log[1200];
+    two_fabrics_named_a("kn1", "kn2", f1, f2);
     snprintf(cmd, sizeof cmd, "batch -q %s %s --spacing 5cm --t-max 0.1s --frames --out %s",
              SCENE, f1, dir);
     ck_assert_msg(tu_run_drape(cmd, out, CAP, err, CAP) == 0, "%s", err);
@@ -978,17 +985,7 @@ START_TEST(test_resume_keeps_names)
     ck_assert(has_log(dir, "a-2"));
     snprintf(cmd, sizeof cmd, "grep -q denim-wang '%s'", log);
     ck_assert_msg(system(cmd) != 0, "logs/a.csv holds the new fabric's row");
-    table *t = malloc(sizeof *t);
-    ck_assert_ptr_nonnull(t);
-    load_table(dir, t);
-    ck_assert_int_eq(t->nrow, 2);
-    for (int r = 0; r < 2; r++) {
-        const char *file = cell(t, r, "fabric_file"), *name = cell(t, r, "fabric");
-        ck_assert_str_eq(cell(t, r, "status"), "t_max");
-        ck_assert_msg(strcmp(name, strstr(file, "/kn1/") ? "cotton-breen" : "denim-wang") == 0,
-                      "%s: row of %s", file, name);
-    }
-    free(t);
+    assert_rows_of_a(dir, "/kn1/");
     /* the names stay through a further --resume in yet another order */
     snprintf(cmd, sizeof cmd, "batch -q %s %s %s --spacing 5cm --t-max 0.1s --frames --out %s "
              "--resume", SCENE, f1, f2, dir);
