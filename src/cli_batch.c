@@ -123,9 +123,9 @@ static void log_path(const batch *b, const job *jb, const char *ext, char *out, 
     snprintf(out, n, "%s/logs/%s.%s", b->dir, jb->name, ext);
 }
 
-/* 1 if the checkpoint at path is an interrupted run of fabric (NAME
- * depends on the command line's order: another fabric may have had this
- * NAME before) made from the file's present text (`drape run --resume`
+/* 1 if the checkpoint at path is an interrupted run of fabric (another
+ * fabric may have had this NAME before: a directory made before NAMEs were
+ * recorded, or a hand-edited inputs.sum) made from the file's present text (`drape run --resume`
  * refuses a finished run and a changed file: the fabric then runs
  * afresh). */
 static int checkpoint_is_for(const char *path, const char *fabric)
@@ -431,14 +431,12 @@ static int keep_names(batch *b)
     unsigned char *named = drape_calloc(b->n > 0 ? (size_t)b->n : 1, 1);
     if (!named) return -1;
     for (int k = 0; k < b->n; k++) {
+        /* a NAME as base_name makes them (inputs.sum may be edited) */
         const char *old = drape_cli_batch_old_name(b, b->jobs[k].fabric);
-        if (!old || strlen(old) >= sizeof b->jobs[k].name ||
-            strspn(old, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") !=
-                strlen(old) || old[0] == '.')
-            continue;
-        int clash = 0;
-        for (int i = 0; i < k && !clash; i++) clash = named[i] && strcmp(b->jobs[i].name, old) == 0;
-        if (clash) continue;
+        char stem[BATCH_NAME_MAX + 1];
+        if (!old || strlen(old) > BATCH_NAME_MAX) continue;
+        base_name(old, stem);
+        if (strcmp(stem, old) != 0 || !name_free(b, k, named, old)) continue;
         snprintf(b->jobs[k].name, sizeof b->jobs[k].name, "%s", old);
         named[k] = 1;
     }

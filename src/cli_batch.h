@@ -35,7 +35,7 @@ enum job_state { JOB_TODO, JOB_RUNNING, JOB_DONE, JOB_KILLED };
 
 typedef struct job {
     const char *fabric;          /* as given on the command line */
-    char name[BATCH_NAME_MAX + 8]; /* unique, file-name safe: logs/NAME.* */
+    char name[BATCH_NAME_MAX + 16]; /* unique, file-name safe: logs/NAME.* (stem, -N) */
     pid_t pid;
     enum job_state state;
     int resumed;                 /* row taken from an earlier results.csv */
