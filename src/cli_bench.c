@@ -697,6 +697,7 @@ int drape_cli_bench(int argc, char **argv)
     if (spacing > 0) b.s.spacing = spacing;
     if (max_order > 0) b.s.max_order = max_order;
     if (drape_fabric_load(b.s.fabric_path, &b.f, &err, drape_cli_warn, NULL) != 0) goto fail;
+    b.s.damping_shear = drape_scene_damping_shear(&b.s, &b.f); /* the fabric's unless the scene's */
 
     if (kernels) {
         if (b.s.kind != DRAPE_SCENE_HANG) {

@@ -129,6 +129,7 @@ static int check_scene(const char *path)
     int status = 0;
     if (drape_scene_load(path, &s, &err, drape_cli_warn, NULL) != 0) goto fail;
     if (drape_fabric_load(s.fabric_path, &f, &err, drape_cli_warn, NULL) != 0) goto fail;
+    s.damping_shear = drape_scene_damping_shear(&s, &f); /* the fabric's unless the scene's */
     if (drape_scene_check_with_fabric(&s, &f, &err) != 0) goto fail;
     L = drape_lattice_new(&s, &f, &err);
     if (!L) goto fail;

@@ -88,7 +88,11 @@ const char *const drape_cli_run_keys[] = {
     /* twenty-second session: a fall ended because it kept gaining energy */
     "fall_pumped",
     /* twenty-third session: where a redone fall was taken up again */
-    "fall_redo_from_s", NULL};
+    "fall_redo_from_s",
+    /* the perturbation that ran (MODEL.md 2): its form, RMS height (field)
+     * or half range (particle), and the field's band of wavelengths */
+    "perturbation_kind", "perturbation_amplitude_m", "perturbation_lambda_min_m",
+    "perturbation_lambda_max_m", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -466,6 +470,9 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (drape_fabric_load(s.fabric_path, &f, &err,
                           resume_dir || ra->no_warnings ? NULL : fabric_warn, &s.terms) != 0)
         goto fail;
+    /* the internal shear damping: the fabric's unless the scene or
+     * --damping-shear gives one; from here on s holds what runs */
+    s.damping_shear = drape_scene_damping_shear(&s, &f);
     if (drape_scene_check_with_fabric(&s, &f, &err) != 0) goto fail;
     /* KLU's fill grows faster than CHOLMOD's (docs/scenes.md, "Memory") */
     if (linsol == DRAPE_LINSOL_KLU && method == DRAPE_METHOD_DYNAMIC &&
@@ -799,6 +806,18 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                          method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_pumped : NAN);
     drape_cli_result_num(&r, "fall_redo_from_s",
                          method == DRAPE_METHOD_FALL && sim_ok ? er.dyn_redo_from : NAN);
+    {
+        int field = s.has_perturbation && s.perturb_kind == DRAPE_PERTURB_FIELD;
+        double lo = NAN, hi = NAN;
+        int modes;
+        if (field) drape_scene_perturbation_band(&s, &lo, &hi, &modes);
+        drape_cli_result_str(&r, "perturbation_kind",
+                             s.has_perturbation ? drape_perturb_kind_names[s.perturb_kind] : NULL);
+        drape_cli_result_num(&r, "perturbation_amplitude_m",
+                             s.has_perturbation ? s.perturb_amplitude : NAN);
+        drape_cli_result_num(&r, "perturbation_lambda_min_m", lo);
+        drape_cli_result_num(&r, "perturbation_lambda_max_m", hi);
+    }
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "result fields differ from drape_cli_run_keys");

@@ -685,6 +685,24 @@ static int get_k(const drape_yread *r, const drape_ynode *n, const char *path,
     return 0;
 }
 
+/* `damping: {shear: T}` (MODEL.md 3.6): the fabric's internal shear
+ * damping, a time; DRAPE_FABRIC_DAMPING_SHEAR when the key is absent. */
+static int get_damping(const drape_yread *r, const drape_ynode *root,
+                       drape_fabric *f)
+{
+    static const char *const keys[] = {"shear", NULL};
+    const drape_ynode *m = drape_ynode_get(root, "damping", NULL);
+    f->damping_shear = DRAPE_FABRIC_DAMPING_SHEAR;
+    if (!m) return 0;
+    if (drape_yread_want_map(r, m, "damping") ||
+        drape_ynode_check_keys(r->doc, m, "damping", keys, r->err) ||
+        drape_yread_opt_quantity(r, m, "damping", "shear", DRAPE_DIM_TIME,
+                                 "time (s)", DRAPE_YREAD_NONNEGATIVE,
+                                 &f->damping_shear, NULL))
+        return -1;
+    return 0;
+}
+
 static int get_stiffness(const drape_yread *r, const drape_ynode *root,
                          drape_fabric *f)
 {
@@ -741,7 +759,7 @@ int drape_fabric_load(const char *path, drape_fabric *out, drape_error *err,
 {
     static const char *const keys[] = {
         "fabric", "description", "source", "weight", "tensile_stiffness",
-        "k_warp", "k_weft", "bending", "shear", "kes", NULL};
+        "k_warp", "k_weft", "bending", "shear", "kes", "damping", NULL};
     drape_yread r = {NULL, err, 0u, warn, warn_ctx};
     drape_fabric *f = NULL;
     drape_ydoc *doc = NULL;
@@ -785,6 +803,7 @@ int drape_fabric_load(const char *path, drape_fabric *out, drape_error *err,
                          "and its unit", f->weight * 1e3,
                          DRAPE_FABRIC_WEIGHT_LO * 1e3, DRAPE_FABRIC_WEIGHT_HI * 1e3);
     if (get_stiffness(&r, root, f)) goto out;
+    if (get_damping(&r, root, f)) goto out;
 
     const drape_ynode *kes = drape_ynode_get(root, "kes", NULL);
     const drape_ynode *bend = drape_ynode_get(root, "bending", NULL);

@@ -35,10 +35,11 @@
  *     and the areas of missing hinges and cells along the staircase edges
  *     are lumped onto the nearest ones (L6; weights may exceed 1);
  *   - the fixed set (clamps of each scene kind, pins) and free numbering;
- *   - the optional perturbation z += a * U(-1, 1) of free particles, from
- *     splitmix64 (Steele, Lea & Flood 2014, "Fast splittable pseudorandom
- *     number generators", OOPSLA; constants as in Vigna's public-domain
- *     splitmix64.c) seeded with the scene's seed, u = (z >> 11) * 2^-53.
+ *   - the optional perturbation of free particles (MODEL.md 2): the
+ *     smooth random height field of perturbation.h sampled at each rest
+ *     position (x, y), z += w(x, y) h(x, y), w the Cusick scene's taper
+ *     (r - r_support) / (r_specimen - r_support) clipped at 0 and 1
+ *     elsewhere; or (kind: particle) z += a * U(-1, 1) in id order.
  *
  * Geometry is done in grid-index units (sigma = 1): the cell of (i, j) is
  * [i - 1/2, i + 1/2] x [j - 1/2, j + 1/2] and the specimen is an axis-aligned
@@ -55,6 +56,7 @@
 #include <string.h>
 
 #include "drape/alloc.h"
+#include "drape/perturbation.h"
 
 /* Snap tolerance (relative, in grid-index units): a dimension within 1e-9
  * spacings of a multiple of sigma counts as that multiple, and a point
@@ -486,21 +488,6 @@ static int apply_pins(drape_lattice *L, const drape_scene *s,
     return 0;
 }
 
-static uint64_t splitmix64(uint64_t *state)
-{
-    uint64_t z = (*state += UINT64_C(0x9e3779b97f4a7c15));
-    z = (z ^ (z >> 30)) * UINT64_C(0xbf58476d1ce4e5b9);
-    z = (z ^ (z >> 27)) * UINT64_C(0x94d049bb133111eb);
-    return z ^ (z >> 31);
-}
-
-/* U(-1, 1) (precisely [-1, 1)) from the top 53 bits. */
-static double uniform_pm1(uint64_t *state)
-{
-    double u = (double)(splitmix64(state) >> 11) * (1.0 / 9007199254740992.0);
-    return 2.0 * u - 1.0;
-}
-
 /* The hinge of direction d that the area of lattice point (i, j) goes to
  * (L6): the nearest one along the same yarn within 3 spacings, else the
  * nearest in the plane.  A clamp hinge (L3') takes area too: its K =
@@ -600,11 +587,12 @@ static int lump_edge_areas(drape_lattice *L, const geom *g, const drape_scene *s
 /* Elements (L2-L6).  With fill = 0 only counts; with fill = 1 stores into
  * the arrays (already sized by the counting pass).  -1: out of memory. */
 static int build_elements(drape_lattice *L, const geom *g,
-                           const drape_scene *s, int want_cells, int fill)
+                           const drape_scene *s, const drape_fabric *f,
+                           int want_cells, int fill)
 {
     int want_edges = (s->terms & DRAPE_TERM_STRETCH) || s->damping_edge > 0.0;
     int want_hinges = (s->terms & DRAPE_TERM_BEND) != 0;
-    int want_corners = (s->terms & DRAPE_TERM_SHEAR) || s->damping_shear > 0.0;
+    int want_corners = (s->terms & DRAPE_TERM_SHEAR) || drape_scene_damping_shear(s, f) > 0.0;
     int ne = 0, nh = 0, nc = 0, nq = 0;
     /* direction d: DRAPE_WEFT steps i, DRAPE_WARP steps j */
     static const int step[2][2] = {{1, 0}, {0, 1}};
@@ -705,6 +693,53 @@ static int build_elements(drape_lattice *L, const geom *g,
     return 0;
 }
 
+/* The perturbation's taper w(x, y) (MODEL.md 2): in the Cusick scene
+ * (r - r_support) / (r_specimen - r_support), clipped at 0, so the field
+ * vanishes at the support's edge; 1 elsewhere. */
+static double taper(const drape_scene *s, const double *x)
+{
+    if (s->kind != DRAPE_SCENE_CUSICK || !(s->diameter > s->support_diameter)) return 1.0;
+    double r = hypot(x[0], x[1]);
+    double w = (r - 0.5 * s->support_diameter) / (0.5 * (s->diameter - s->support_diameter));
+    return w > 0.0 ? w : 0.0;
+}
+
+/* Raise the free particles by the scene's perturbation (MODEL.md 2,
+ * perturbation.h): the smooth field, tapered, sampled at each rest
+ * position; or amplitude * U(-1, 1) per particle in id order. */
+static int perturb(drape_lattice *L, const drape_scene *s, drape_error *err)
+{
+    drape_rng g;
+    if (s->perturb_kind == DRAPE_PERTURB_PARTICLE) {
+        drape_rng_seed(&g, (uint64_t)s->perturb_seed);
+        for (int p = 0; p < L->n; p++)
+            if (!L->fixed[p])
+                L->xinit[3 * p + 2] += s->perturb_amplitude * drape_rng_uniform_pm1(&g);
+        return 0;
+    }
+    double lo, hi;
+    int modes;
+    drape_scene_perturbation_band(s, &lo, &hi, &modes);
+    drape_field *f = drape_malloc(sizeof *f);
+    if (!f)
+        return drape_error_set(err, DRAPE_E_NOMEM, s->path, 0, 0, NULL,
+                               "out of memory building the lattice");
+    if (drape_field_draw(f, (uint64_t)s->perturb_seed, modes, lo, hi, s->perturb_amplitude)) {
+        drape_free(f);
+        return drape_error_set(err, DRAPE_E_INPUT, s->path, 0, 0, "perturbation",
+                               "the perturbation field's band is out of range (lambda_min "
+                               "%g m, lambda_max %g m, %d modes, amplitude %g m)",
+                               lo, hi, modes, s->perturb_amplitude);
+    }
+    for (int p = 0; p < L->n; p++) {
+        const double *x = L->x0 + 3 * p;
+        if (!L->fixed[p])
+            L->xinit[3 * p + 2] += taper(s, x) * drape_field_height(f, x[0], x[1]);
+    }
+    drape_free(f);
+    return 0;
+}
+
 static double nominal_area(const drape_scene *s)
 {
     switch (s->shape) {
@@ -797,13 +832,7 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
 
     /* initial state: rest + perturbation of free particles, in id order */
     memcpy(L->xinit, L->x0, 3 * un * sizeof *L->x0);
-    if (s->has_perturbation) {
-        uint64_t state = (uint64_t)s->perturb_seed;
-        for (int p = 0; p < n; p++)
-            if (!L->fixed[p])
-                L->xinit[3 * p + 2] += s->perturb_amplitude
-                                       * uniform_pm1(&state);
-    }
+    if (s->has_perturbation && perturb(L, s, err) != 0) goto out;
 
     /* elements: count, allocate, fill.  Twist cells only where the bias
      * term is asked for (by default it is), with bend, the fabric gives a
@@ -813,7 +842,7 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
      * stiffer, so `seed` runs the seed's model) */
     int want_cells = (s->terms & DRAPE_TERM_BIAS) && (s->terms & DRAPE_TERM_BEND) &&
                      f->has_bias && s->energy_form == DRAPE_FORM_CONSISTENT;
-    build_elements(L, &g, s, want_cells, 0);
+    build_elements(L, &g, s, f, want_cells, 0);
     if (L->n_edges > 0) {
         L->edges = drape_calloc((size_t)L->n_edges, sizeof *L->edges);
         if (!L->edges) goto nomem;
@@ -830,7 +859,7 @@ drape_lattice *drape_lattice_new(const drape_scene *s, const drape_fabric *f,
         L->cells = drape_calloc((size_t)L->n_cells, sizeof *L->cells);
         if (!L->cells) goto nomem;
     }
-    if (build_elements(L, &g, s, want_cells, 1) != 0) goto nomem;
+    if (build_elements(L, &g, s, f, want_cells, 1) != 0) goto nomem;
     rc = 0;
     goto out;
 

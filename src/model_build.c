@@ -398,8 +398,11 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
                         "drape_model_new: inconsistent lattice (ids, sigma or masses)");
         return NULL;
     }
-    if (!(o->c_air >= 0.0) || !(o->c_edge >= 0.0) || !(o->beta_shear >= 0.0) ||
+    if (!(o->c_air >= 0.0) || !(o->c_edge >= 0.0) ||
+        !(o->beta_shear >= 0.0 || o->beta_shear == DRAPE_SCENE_DAMPING_SHEAR_FABRIC) ||
+        !(F->damping_shear >= 0.0) ||
         !isfinite(o->c_air) || !isfinite(o->c_edge) || !isfinite(o->beta_shear) ||
+        !isfinite(F->damping_shear) ||
         !isfinite(o->g)) {
         drape_error_set(err, DRAPE_E_INPUT, NULL, 0, 0, NULL,
                         "damping and gravity must be finite and >= 0 (c_air %g, c_edge %g, "
@@ -412,13 +415,14 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
     m->L = L;
     m->F = *F;
     m->o = *o;
+    if (m->o.beta_shear < 0.0) m->o.beta_shear = F->damping_shear; /* the fabric's */
     m->parts = o->terms & (DRAPE_PART_STRETCH | DRAPE_PART_BEND |
                            DRAPE_PART_SHEAR | DRAPE_PART_GRAVITY);
     if (o->c_air > 0.0) m->parts |= DRAPE_PART_AIR;
     if (o->c_edge > 0.0) m->parts |= DRAPE_PART_EDGE;
     /* shear damping acts on the lattice's shear corners (built when the
      * scene has the shear term or sets damping.shear) */
-    if (o->beta_shear > 0.0 && L->n_corners > 0) m->parts |= DRAPE_PART_SHEAR_DAMPING;
+    if (m->o.beta_shear > 0.0 && L->n_corners > 0) m->parts |= DRAPE_PART_SHEAR_DAMPING;
     m->shear_g0 = fmax(drape_fit_slope(&m->F.shear_mean, 0.0), 0.0);
     m->nf = L->n_free;
     m->N = 3 * (int64_t)L->n_free;

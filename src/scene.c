@@ -27,6 +27,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "drape/perturbation.h"
 #include "drape/units.h"
 #include "drape/yamldoc.h"
 #include "yread.h"
@@ -320,10 +321,14 @@ static int parse_table(const drape_yread *c, const drape_ynode *root, drape_scen
     return 0;
 }
 
+const char *const drape_perturb_kind_names[] = {"field", "particle", NULL};
+
 static int parse_perturbation(const drape_yread *c, const drape_ynode *root, drape_scene *s)
 {
-    static const char *const keys[] = {"amplitude", "seed", NULL};
-    const drape_ynode *m = drape_ynode_get(root, "perturbation", NULL), *v;
+    static const char *const keys[] = {"amplitude", "seed", "kind", "lambda_min",
+                                       "lambda_max", "modes", NULL};
+    static const char *const field_keys[] = {"lambda_min", "lambda_max", "modes"};
+    const drape_ynode *m = drape_ynode_get(root, "perturbation", NULL), *v, *vmin = NULL;
     if (!m) return 0;
     if (drape_yread_want_map(c, m, "perturbation") ||
         drape_ynode_check_keys(c->doc, m, "perturbation", keys, c->err) ||
@@ -332,6 +337,43 @@ static int parse_perturbation(const drape_yread *c, const drape_ynode *root, dra
                                  &s->perturb_amplitude, NULL))
         return -1;
     s->has_perturbation = 1;
+    if ((v = drape_ynode_get(m, "kind", NULL)) != NULL) {
+        int k;
+        if (drape_yread_enum(c, v, "perturbation.kind", drape_perturb_kind_names, &k)) return -1;
+        s->perturb_kind = (drape_perturb_kind)k;
+    }
+    if (s->perturb_kind == DRAPE_PERTURB_PARTICLE)
+        for (size_t k = 0; k < sizeof field_keys / sizeof *field_keys; k++)
+            if ((v = drape_ynode_get(m, field_keys[k], NULL)) != NULL) {
+                char path[DRAPE_YREAD_PATH_MAX];
+                drape_yread_path(path, sizeof path, "perturbation", field_keys[k]);
+                return drape_yread_error(c, v, path, DRAPE_E_INPUT,
+                                         "`%s` belongs to the smooth field (kind: field); "
+                                         "the particle form has only amplitude and seed",
+                                         field_keys[k]);
+            }
+    if (drape_yread_opt_quantity(c, m, "perturbation", "lambda_min", DRAPE_DIM_LENGTH,
+                                 "length", DRAPE_YREAD_POSITIVE, &s->perturb_lambda_min,
+                                 &vmin) ||
+        drape_yread_opt_quantity(c, m, "perturbation", "lambda_max", DRAPE_DIM_LENGTH,
+                                 "length", DRAPE_YREAD_POSITIVE, &s->perturb_lambda_max, &v))
+        return -1;
+    if (vmin && v && s->perturb_lambda_max < s->perturb_lambda_min)
+        return drape_yread_error(c, v, "perturbation.lambda_max", DRAPE_E_INPUT,
+                                 "the longest wavelength (%g m) is shorter than lambda_min "
+                                 "(%g m)", s->perturb_lambda_max, s->perturb_lambda_min);
+    if (!vmin && v && s->perturb_lambda_max < DRAPE_FIELD_LAMBDA_MIN)
+        return drape_yread_error(c, v, "perturbation.lambda_max", DRAPE_E_INPUT,
+                                 "the longest wavelength (%g m) is shorter than the default "
+                                 "lambda_min (%g m): give lambda_min too",
+                                 s->perturb_lambda_max, DRAPE_FIELD_LAMBDA_MIN);
+    if ((v = drape_ynode_get(m, "modes", NULL)) != NULL) {
+        long nm;
+        if (drape_yread_long(c, v, "perturbation.modes", "an integer from 1 to 1024", 1,
+                             DRAPE_FIELD_MODES_MAX, &nm))
+            return -1;
+        s->perturb_modes = (int)nm;
+    }
     if ((v = drape_ynode_get(m, "seed", NULL)) != NULL) {
         const char *t = v->type == DRAPE_YNODE_SCALAR ? v->scalar : "";
         int ok = v->type == DRAPE_YNODE_SCALAR && t[0] != 0;
@@ -449,6 +491,7 @@ static int parse_damping(const drape_yread *c, const drape_ynode *root, drape_sc
 {
     static const char *const keys[] = {"air", "edge", "shear", NULL};
     const drape_ynode *m = drape_ynode_get(root, "damping", NULL);
+    s->damping_shear = DRAPE_SCENE_DAMPING_SHEAR_FABRIC;
     if (!m) return 0;
     if (drape_yread_want_map(c, m, "damping") ||
         drape_ynode_check_keys(c->doc, m, "damping", keys, c->err) ||

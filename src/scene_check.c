@@ -41,6 +41,7 @@
 #include <math.h>
 #include <stdio.h>
 
+#include "drape/perturbation.h"
 #include "drape/units.h"
 
 /* Lattice counting slack and memory limits (see the header comment). */
@@ -250,6 +251,31 @@ double drape_scene_fall_swing(const drape_scene *s)
 {
     if (s->fall_swing >= 0.0) return s->fall_swing;
     return s->kind == DRAPE_SCENE_TABLE ? DRAPE_FALL_SWING_TABLE : DRAPE_FALL_SWING;
+}
+
+void drape_scene_perturbation_band(const drape_scene *s, double *lambda_min,
+                                   double *lambda_max, int *modes)
+{
+    double lo = s->perturb_lambda_min > 0.0 ? s->perturb_lambda_min : DRAPE_FIELD_LAMBDA_MIN;
+    double hi = s->perturb_lambda_max;
+    if (!(hi > 0.0)) {
+        switch (s->shape) {
+        case DRAPE_SHAPE_CIRCLE: hi = s->diameter; break;
+        case DRAPE_SHAPE_RECTANGLE: hi = fmax(s->width, s->height); break;
+        case DRAPE_SHAPE_STRIP: hi = fmax(s->length, s->width); break;
+        default: hi = lo; break;
+        }
+        if (!(hi >= lo)) hi = lo; /* a specimen smaller than the shortest wave */
+    }
+    *lambda_min = lo;
+    *lambda_max = hi;
+    *modes = s->perturb_modes > 0 ? s->perturb_modes : DRAPE_FIELD_MODES;
+}
+
+double drape_scene_damping_shear(const drape_scene *s, const drape_fabric *f)
+{
+    if (s->damping_shear >= 0.0) return s->damping_shear;
+    return f ? f->damping_shear : 0.0;
 }
 
 double drape_scene_animate_step(const drape_scene *s, double *frame_s, int *substeps)

@@ -159,6 +159,30 @@ START_TEST(test_stiffness_forms)
 }
 END_TEST
 
+/* The internal shear damping (MODEL.md 3.6): `damping: {shear: T}` in any
+ * time unit, 0 allowed (off), 0.5 ms when the key is absent. */
+START_TEST(test_damping_shear)
+{
+    drape_fabric f;
+    drape_error err;
+    const char *base = "fabric: t\nweight: 0.2\ntensile_stiffness: 1000 N/m\n" BEND P_ONE WEFT SHEAR;
+    char text[1024];
+    ck_assert_msg(load_text(base, &f, &err, NULL) == 0, "%s", err.msg);
+    ck_assert(f.damping_shear == 0.5e-3);
+    static const struct { const char *v; double s; } ok[] = {
+        {"2 ms", 2e-3}, {"0.25e-3 s", 0.25e-3}, {"0 s", 0.0}, {"0", 0.0}};
+    for (size_t k = 0; k < sizeof ok / sizeof ok[0]; k++) {
+        snprintf(text, sizeof text, "%sdamping: {shear: %s}\n", base, ok[k].v);
+        ck_assert_msg(load_text(text, &f, &err, NULL) == 0, "%s: %s", ok[k].v, err.msg);
+        ck_assert_msg(fabs(f.damping_shear - ok[k].s) <= 1e-15 * ok[k].s, "%s: %.17g",
+                      ok[k].v, f.damping_shear);
+    }
+    snprintf(text, sizeof text, "%sdamping: {}\n", base);
+    ck_assert_msg(load_text(text, &f, &err, NULL) == 0, "%s", err.msg);
+    ck_assert(f.damping_shear == 0.5e-3);
+}
+END_TEST
+
 START_TEST(test_shear_per_direction_and_units)
 {
     drape_fabric f;
@@ -614,6 +638,18 @@ static const bad_case bad[] = {
      DRAPE_E_INPUT, 5, 43, "kes.warp.HB", "unknown key `HB`; did you mean"},
     {KES_HEAD "kes: {warp: {B: 1, G: 1}, weft: {B: 1, G: 1}}\n" BEND P_ONE
      WEFT, DRAPE_E_INPUT, 6, 3, "bending", "either `kes` or"},
+    /* damping, on line 14 (after the 13 lines of the root keys, BEND P_ONE WEFT SHEAR) */
+    {"fabric: t\nweight: 1\ntensile_stiffness: 1 N/m\n" BEND P_ONE WEFT SHEAR
+     "damping: {shear: -1 ms}\n", DRAPE_E_INPUT, 14, 18, "damping.shear",
+     "expected a non-negative time"},
+    {"fabric: t\nweight: 1\ntensile_stiffness: 1 N/m\n" BEND P_ONE WEFT SHEAR
+     "damping: {shear: 1 N/m}\n", DRAPE_E_INPUT, 14, 18, "damping.shear",
+     "expected a time (s), got N/m"},
+    {"fabric: t\nweight: 1\ntensile_stiffness: 1 N/m\n" BEND P_ONE WEFT SHEAR
+     "damping: {air: 1 1/s}\n", DRAPE_E_INPUT, 14, 11, "damping.air",
+     "unknown key `air`"},
+    {"fabric: t\nweight: 1\ntensile_stiffness: 1 N/m\n" BEND P_ONE WEFT SHEAR
+     "damping: 1 ms\n", DRAPE_E_INPUT, 14, 10, "damping", "expected a mapping"},
     /* YAML level errors come through */
     {"fabric: t\nfabric: u\n", DRAPE_E_INPUT, 2, 1, "fabric",
      "duplicate key `fabric`"},
@@ -845,6 +881,7 @@ Suite *fabric_suite(void)
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, test_cotton_breen);
     tcase_add_test(tc, test_stiffness_forms);
+    tcase_add_test(tc, test_damping_shear);
     tcase_add_test(tc, test_shear_per_direction_and_units);
     tcase_add_test(tc, test_last_piece_with_to);
     tcase_add_test(tc, test_slope_jump_warning);

@@ -12,6 +12,7 @@
 
 #include "drape/alloc.h"
 #include "drape/lattice.h"
+#include "drape/perturbation.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -643,6 +644,7 @@ START_TEST(test_perturbation)
     drape_scene s;
     circle(&s, 0.30, 0.01);
     s.has_perturbation = 1;
+    s.perturb_kind = DRAPE_PERTURB_PARTICLE;
     s.perturb_amplitude = 1e-4;
     s.perturb_seed = 1;
     drape_lattice *A = build(&s);
@@ -680,6 +682,81 @@ START_TEST(test_perturbation)
     A = build(&s);
     for (int k = 0; k < 3 * A->n; k++) ck_assert(A->xinit[k] == A->x0[k]);
     drape_lattice_free(A);
+}
+END_TEST
+
+/* The smooth field (MODEL.md 2) belongs to the specimen: the Cusick
+ * specimen at 1 cm and at 0.5 cm (every 1 cm lattice point is one of the
+ * 0.5 cm lattice) has the same height at the same material point; the
+ * height is the taper (r - r_support) / (r_specimen - r_support) times the
+ * field drawn with the seed and the scene's band, sampled at the rest
+ * position about the specimen's centre; a rectangle (hang) has no taper. */
+START_TEST(test_perturbation_field_spacing)
+{
+    static drape_field F;
+    drape_scene s;
+    const double A = 1e-4, R = 0.15, Rs = 0.09;
+    circle(&s, 2 * R, 0.01);
+    s.support_diameter = 2 * Rs;
+    s.has_perturbation = 1;
+    s.perturb_amplitude = A;
+    s.perturb_seed = 5;
+    drape_lattice *C = build(&s);
+    s.spacing = 0.005;
+    drape_lattice *Fn = build(&s);
+    double lo, hi;
+    int modes;
+    drape_scene_perturbation_band(&s, &lo, &hi, &modes);
+    ck_assert(lo == 0.02 && hi == 2 * R && modes == 64); /* MODEL.md's defaults */
+    ck_assert_int_eq(drape_field_draw(&F, 5, 64, 0.02, 2 * R, A), 0);
+    int shared = 0, raised = 0;
+    double zmax = 0.0;
+    for (int p = 0; p < C->n; p++) {
+        const double *x = C->x0 + 3 * p;
+        double z = C->xinit[3 * p + 2], r = hypot(x[0], x[1]);
+        int q = -1;
+        for (int k = 0; k < Fn->n && q < 0; k++)
+            if (fabs(Fn->x0[3 * k] - x[0]) < 1e-9 && fabs(Fn->x0[3 * k + 1] - x[1]) < 1e-9) q = k;
+        ck_assert_msg(q >= 0, "1 cm particle at (%g, %g) not on the 0.5 cm lattice", x[0], x[1]);
+        shared++;
+        ck_assert(C->fixed[p] == Fn->fixed[q]);
+        ck_assert_msg(fabs(z - Fn->xinit[3 * q + 2]) <= 1e-12 * A,
+                      "at (%g, %g): %.17g at 1 cm, %.17g at 0.5 cm", x[0], x[1], z,
+                      Fn->xinit[3 * q + 2]);
+        double w = r > Rs ? (r - Rs) / (R - Rs) : 0.0;
+        double want = C->fixed[p] ? 0.0 : w * drape_field_height(&F, x[0], x[1]);
+        ck_assert_msg(fabs(z - want) <= 1e-12 * A, "at (%g, %g): %.17g, expected %.17g", x[0],
+                      x[1], z, want);
+        raised += z != 0.0;
+        zmax = fmax(zmax, fabs(z));
+    }
+    ck_assert_int_eq(shared, C->n);
+    ck_assert_int_gt(raised, C->n_free / 2);
+    ck_assert(zmax > 0.5 * A && zmax < A * sqrt(128.0));
+    drape_lattice_free(C);
+    drape_lattice_free(Fn);
+    /* a rectangle: no taper, the band's default top its larger side;
+     * another seed, another field */
+    rect(&s, DRAPE_SCENE_HANG, 0.30, 0.20, 0.02);
+    s.n_pins = 1;
+    s.pins[0][0] = 0;
+    s.pins[0][1] = -1;
+    s.has_perturbation = 1;
+    s.perturb_amplitude = A;
+    s.perturb_seed = 6;
+    s.perturb_lambda_min = 0.03;
+    s.perturb_modes = 10;
+    drape_lattice *H = build(&s);
+    drape_scene_perturbation_band(&s, &lo, &hi, &modes);
+    ck_assert(lo == 0.03 && hi == 0.30 && modes == 10);
+    ck_assert_int_eq(drape_field_draw(&F, 6, 10, 0.03, 0.30, A), 0);
+    for (int p = 0; p < H->n; p++) {
+        const double *x = H->x0 + 3 * p;
+        double want = H->fixed[p] ? 0.0 : drape_field_height(&F, x[0], x[1]);
+        ck_assert(fabs(H->xinit[3 * p + 2] - want) <= 1e-12 * A);
+        ck_assert(H->xinit[3 * p] == x[0] && H->xinit[3 * p + 1] == x[1]);
+    }
+    drape_lattice_free(H);
 }
 END_TEST
 
@@ -791,6 +868,7 @@ Suite *lattice_suite(void)
     tcase_add_test(tc, test_cantilever_clamp_convergence);
     tcase_add_test(tc, test_terms_select_elements);
     tcase_add_test(tc, test_perturbation);
+    tcase_add_test(tc, test_perturbation_field_spacing);
     tcase_add_test(tc, test_check_detects_damage);
     tcase_add_test(tc, test_bad_input);
     tcase_add_test(tc, test_alloc_failures);

@@ -1712,6 +1712,79 @@ START_TEST(test_shear_damping)
 }
 END_TEST
 
+/* Where the shear damping's beta comes from (MODEL.md 3.6): a fabric file
+ * without `damping` gives 0.5 ms; a fabric's own value is used where the
+ * scene gives none; the scene's (or the command line's) wins, 0 off.  The
+ * force is linear in beta, so each model's damping force is checked
+ * against beta / 1 ms times that of a model built with 1 ms. */
+START_TEST(test_shear_damping_sources)
+{
+    drape_scene S;
+    drape_fabric F;
+    drape_error err;
+    drape_error_clear(&err);
+    ck_assert_msg(drape_scene_load(tu_src("scenes/cusick.yaml"), &S, &err, NULL, NULL) == 0,
+                  "%s", err.msg);
+    ck_assert_msg(drape_fabric_load(S.fabric_path, &F, &err, NULL, NULL) == 0, "%s", err.msg);
+    ck_assert(S.damping_shear == DRAPE_SCENE_DAMPING_SHEAR_FABRIC);
+    ck_assert(F.damping_shear == 0.5e-3);
+    S.spacing = 0.03;
+    drape_lattice *L = drape_lattice_new(&S, &F, &err);
+    ck_assert_msg(L != NULL, "%s", err.msg);
+    const unsigned SD = DRAPE_PART_SHEAR_DAMPING;
+    int n3 = 3 * L->n;
+    double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
+    double *f1 = malloc(sizeof(double) * n3), *f = malloc(sizeof(double) * n3);
+    uint64_t rs = 91;
+    for (int i = 0; i < n3; i++) {
+        int fr = !L->fixed[i / 3];
+        x[i] = L->xinit[i] + (fr ? 0.2 * L->sigma * urand(&rs) : 0.0);
+        v[i] = fr ? 0.05 * urand(&rs) : 0.0;
+    }
+    drape_model_opts o;
+    drape_model_opts_from_scene(&S, &o);
+    o.beta_shear = 1e-3;
+    drape_model *m = drape_model_new(L, &F, &o, &err);
+    ck_assert_msg(m != NULL, "%s", err.msg);
+    ck_assert_int_eq(drape_model_forces(m, SD, x, v, f1), 0);
+    drape_model_free(m);
+    double fmax1 = 0.0;
+    for (int i = 0; i < n3; i++) fmax1 = fmax(fmax1, fabs(f1[i]));
+    ck_assert(fmax1 > 0.0);
+    /* scene beta, fabric beta -> the beta that acts (0: no part) */
+    static const double cases[][3] = {
+        {DRAPE_SCENE_DAMPING_SHEAR_FABRIC, 0.5e-3, 0.5e-3}, /* the default */
+        {DRAPE_SCENE_DAMPING_SHEAR_FABRIC, 2e-3, 2e-3},     /* the fabric's own */
+        {0.25e-3, 2e-3, 0.25e-3},                           /* the scene's wins */
+        {0.0, 2e-3, 0.0},                                   /* the scene's 0: off */
+        {DRAPE_SCENE_DAMPING_SHEAR_FABRIC, 0.0, 0.0}};      /* the fabric's 0: off */
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        S.damping_shear = cases[c][0];
+        F.damping_shear = cases[c][1];
+        ck_assert(drape_scene_damping_shear(&S, &F) == cases[c][2]);
+        drape_model_opts_from_scene(&S, &o);
+        m = drape_model_new(L, &F, &o, &err);
+        ck_assert_msg(m != NULL, "case %zu: %s", c, err.msg);
+        ck_assert_int_eq(!!(drape_model_parts(m) & SD), cases[c][2] > 0.0);
+        if (cases[c][2] > 0.0) {
+            ck_assert_int_eq(drape_model_forces(m, SD, x, v, f), 0);
+            double r = cases[c][2] / 1e-3, worst = 0.0;
+            for (int i = 0; i < n3; i++) worst = fmax(worst, fabs(f[i] - r * f1[i]));
+            ck_assert_msg(worst <= 1e-13 * r * fmax1, "case %zu: off by %g of %g", c, worst,
+                          r * fmax1);
+        }
+        drape_model_free(m);
+    }
+    /* a negative fabric value is refused */
+    F.damping_shear = -1e-3;
+    S.damping_shear = DRAPE_SCENE_DAMPING_SHEAR_FABRIC;
+    drape_model_opts_from_scene(&S, &o);
+    ck_assert(drape_model_new(L, &F, &o, &err) == NULL);
+    free(x); free(v); free(f1); free(f);
+    drape_lattice_free(L);
+}
+END_TEST
+
 Suite *model_suite(void); /* found by the runner */
 Suite *model_suite(void)
 {
@@ -1728,6 +1801,7 @@ Suite *model_suite(void)
     tcase_set_timeout(ts, 120);
     tcase_add_test(ts, test_scenes);
     tcase_add_test(ts, test_shear_damping);
+    tcase_add_test(ts, test_shear_damping_sources);
     suite_add_tcase(s, ts);
     TCase *tp = tcase_create("physics");
     tcase_set_timeout(tp, 120);

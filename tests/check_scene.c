@@ -261,7 +261,8 @@ START_TEST(test_defaults)
     ck_assert_int_eq(s.has_perturbation, 0);
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_CONSISTENT);
     ck_assert_uint_eq(s.terms, 31u); /* all five, bias included (issue 18) */
-    ck_assert(s.damping_air == 0.0 && s.damping_edge == 0.0 && s.damping_shear == 0.0);
+    ck_assert(s.damping_air == 0.0 && s.damping_edge == 0.0);
+    ck_assert(s.damping_shear == DRAPE_SCENE_DAMPING_SHEAR_FABRIC); /* the fabric's */
     ck_assert_str_eq(s.integrator, "auto");
     ck_assert_close_rel(s.rtol, 1e-4, 1e-12);
     ck_assert_close_rel(s.atol, 1e-7, 1e-12);
@@ -349,6 +350,8 @@ START_TEST(test_options)
     ck_assert_int_eq(s.has_perturbation, 1);
     ck_assert(s.perturb_amplitude == 0.0);
     ck_assert_uint_eq(s.perturb_seed, 0);
+    ck_assert_int_eq(s.perturb_kind, DRAPE_PERTURB_FIELD); /* MODEL.md 2's default */
+    ck_assert(s.perturb_lambda_min == 0.0 && s.perturb_lambda_max == 0.0 && s.perturb_modes == 0);
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_SEED);
     ck_assert_uint_eq(s.terms, DRAPE_TERM_GRAVITY | DRAPE_TERM_BEND);
     ck_assert_close_rel(s.damping_edge, 1.0, 1e-12);
@@ -703,6 +706,30 @@ START_TEST(test_bad_ranges)
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "damping: {shear: -1 ms}\nend: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 18, "damping.shear", "non-negative");
+    /* the perturbation's form and band */
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, kind: noise}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 39, "perturbation.kind", "field");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, kind: particle, lambda_min: 1 cm}\n"
+                 "end: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 61, "perturbation.lambda_min", "belongs to the smooth field");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, lambda_min: 4 cm, lambda_max: 3 cm}\n"
+                 "end: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 63, "perturbation.lambda_max", "shorter than lambda_min");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, lambda_max: 1 cm}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 45, "perturbation.lambda_max", "give lambda_min too");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, lambda_min: 0 cm}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 45, "perturbation.lambda_min", "positive");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, modes: 0}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 40, "perturbation.modes", "1 to 1024");
+    expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
+                 "perturbation: {amplitude: 1 mm, modes: 1025}\nend: {t_max: 5 s}\n",
+                 DRAPE_E_INPUT, 4, 40, "perturbation.modes", "1 to 1024");
     /* seeds */
     expect_error("scene: cusick\nfabric: @F\nspacing: 2 cm\n"
                  "perturbation: {amplitude: 1 mm, seed: -1}\n"
@@ -714,6 +741,44 @@ START_TEST(test_bad_ranges)
                  "end: {t_max: 5 s}\n",
                  DRAPE_E_INPUT, 4, 39, "perturbation.seed",
                  "non-negative integer");
+}
+END_TEST
+
+/* The perturbation's keys (MODEL.md 2): the form, the band, the modes. */
+START_TEST(test_perturbation_keys)
+{
+    drape_scene s;
+    drape_error e;
+    char buf[1200];
+    int rc = load_text("scene: cusick\nfabric: @F\nspacing: 1 cm\n"
+                       "perturbation: {amplitude: 0.2 mm, seed: 4, lambda_min: 3 cm, "
+                       "lambda_max: 0.2 m, modes: 128}\nend: {t_max: 5 s}\n", &s, &e);
+    ck_assert_msg(rc == 0, "%s", drape_error_format(&e, buf, sizeof buf));
+    ck_assert_int_eq(s.perturb_kind, DRAPE_PERTURB_FIELD);
+    ck_assert_close_rel(s.perturb_amplitude, 2e-4, 1e-12);
+    ck_assert_close_rel(s.perturb_lambda_min, 0.03, 1e-12);
+    ck_assert_close_rel(s.perturb_lambda_max, 0.2, 1e-12);
+    ck_assert_int_eq(s.perturb_modes, 128);
+    double lo, hi;
+    int m;
+    drape_scene_perturbation_band(&s, &lo, &hi, &m);
+    ck_assert(lo == s.perturb_lambda_min && hi == s.perturb_lambda_max && m == 128);
+    rc = load_text("scene: cusick\nfabric: @F\nspacing: 1 cm\n"
+                   "perturbation: {amplitude: 0.1 mm, kind: particle}\nend: {t_max: 5 s}\n",
+                   &s, &e);
+    ck_assert_msg(rc == 0, "%s", drape_error_format(&e, buf, sizeof buf));
+    ck_assert_int_eq(s.perturb_kind, DRAPE_PERTURB_PARTICLE);
+    /* the default band: 2 cm up to the specimen's largest dimension, and
+     * no shorter than lambda_min on a small specimen */
+    rc = load_text("scene: cusick\nfabric: @F\nspacing: 1 cm\n"
+                   "specimen: {shape: circle, diameter: 25 cm}\nsupport: {diameter: 10 cm}\n"
+                   "perturbation: {amplitude: 0.1 mm}\nend: {t_max: 5 s}\n", &s, &e);
+    ck_assert_msg(rc == 0, "%s", drape_error_format(&e, buf, sizeof buf));
+    drape_scene_perturbation_band(&s, &lo, &hi, &m);
+    ck_assert(lo == 0.02 && fabs(hi - 0.25) < 1e-15 && m == 64);
+    s.diameter = 0.015;
+    drape_scene_perturbation_band(&s, &lo, &hi, &m);
+    ck_assert(lo == 0.02 && hi == 0.02);
 }
 END_TEST
 
@@ -1254,6 +1319,7 @@ Suite *scene_suite(void)
     TCase *tc = tcase_create("examples");
     tcase_add_checked_fixture(tc, setup, NULL);
     tcase_add_test(tc, test_cusick);
+    tcase_add_test(tc, test_perturbation_keys);
     tcase_add_test(tc, test_hang);
     tcase_add_test(tc, test_table);
     tcase_add_test(tc, test_cantilever);

@@ -567,14 +567,14 @@ START_TEST(test_fall_retry)
     ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
     double steps[5], refused[5], dc[5];
     for (int k = 0; k < 5; k++) {
-        const char *scene = "../scenes/cusick.yaml";
+        const char *scene = "data/undamped/cusick.yaml";
         if (k == 2) {
             snprintf(text, sizeof text,
                      "scene: cusick\nfabric: %s/../fabrics/cotton-breen.yaml\n"
                      "specimen: {shape: circle, diameter: 30 cm}\nsupport: {diameter: 18 cm}\n"
-                     "spacing: 1.5 cm\nperturbation: {amplitude: 0.1 mm, seed: 6}\n"
+                     "spacing: 1.5 cm\nperturbation: {amplitude: 0.1 mm, seed: 6, kind: particle}\n"
                      "model: {energy_form: consistent, terms: [stretch, bend, shear, gravity, bias]}\n"
-                     "damping: {air: 2 1/s, edge: 0.02 N.s/m}\n"
+                     "damping: {air: 2 1/s, edge: 0.02 N.s/m, shear: 0 s}\n"
                      "solver: {method: fall, fall_retry: 80 ms}\n"
                      "end: {equilibrium: {speed: 1e-4 m/s, window: 0.2 s}, t_max: 20 s}\n",
                      cwd);
@@ -718,7 +718,7 @@ START_TEST(test_fall_energy_balance)
     ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
     const char *tol[] = {" --fall-tol 30um", " --fall-tol 100um", ""};
     for (int k = 0; k < 3; k++) {
-        snprintf(args, sizeof args, "run -q %s/../scenes/cusick.yaml --specimens 1 --seed 3%s",
+        snprintf(args, sizeof args, "run -q %s/data/undamped/cusick.yaml --specimens 1 --seed 3%s",
                  cwd, tol[k]);
         ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
         json_object *o = json_tokener_parse(out);
@@ -754,7 +754,7 @@ START_TEST(test_fall_energy_balance)
      * seventeenth session) neither does seed 2 */
     for (int c = 0; c < 3; c++) {
         int seed = c == 1 ? 3 : 2;
-        snprintf(args, sizeof args, "run -q %s/../scenes/cusick.yaml --specimens 1 --seed %d%s",
+        snprintf(args, sizeof args, "run -q %s/data/undamped/cusick.yaml --specimens 1 --seed %d%s",
                  cwd, seed, c < 2 ? " --fall-fold-time 0" : "");
         ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
         json_object *g = json_tokener_parse(out);
@@ -820,7 +820,7 @@ START_TEST(test_fall_pumped)
     char args[4096], cwd[1024];
     ck_assert_ptr_nonnull(getcwd(cwd, sizeof cwd));
     snprintf(args, sizeof args,
-             "run -q %s/../scenes/table.yaml --spacing 2cm --specimens 1 --seed 6 --fall-swing 0.02",
+             "run -q %s/data/undamped/table.yaml --spacing 2cm --specimens 1 --seed 6 --fall-swing 0.02",
              cwd);
     ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
     json_object *o = json_tokener_parse(out);

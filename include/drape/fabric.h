@@ -17,6 +17,12 @@
 #define DRAPE_FABRIC_NAME_MAX 128
 #define DRAPE_FABRIC_TEXT_MAX 4096
 
+/* The internal shear damping beta of a fabric whose file gives none
+ * (`damping: {shear: T}`), s: MODEL.md 3.6.  A viscous shear stress
+ * beta G0 dgamma/dt, G0 the slope of the mean shear curve at zero shear;
+ * docs/model.md, "Shear damping", says what it stands for. */
+#define DRAPE_FABRIC_DAMPING_SHEAR 0.5e-3
+
 /* Material directions.  The lattice's i axis runs along the weft, j along
  * the warp (MODEL.md section 2). */
 typedef enum drape_dir { DRAPE_WEFT = 0, DRAPE_WARP = 1 } drape_dir;
@@ -36,6 +42,9 @@ typedef struct drape_fabric {
                              (both equal when the file gives one curve) */
     drape_fit shear_mean; /* (shear[0] + shear[1]) / 2, used by the model */
     int from_kes;         /* 1 if built from KES-F summary values */
+    double damping_shear; /* internal shear damping beta, s (`damping:
+                             {shear: T}`; DRAPE_FABRIC_DAMPING_SHEAR when
+                             absent; 0 = none), MODEL.md 3.6 */
 } drape_fabric;
 
 /* Load a fabric file.  Returns 0 and fills *f, or -1 and fills err with

@@ -57,11 +57,14 @@ typedef struct drape_model_opts {
     double c_air;                 /* 1/s, 0 = off */
     double c_edge;                /* N.s/m, 0 = off */
     double g;                     /* m/s^2, along -z (DRAPE_G_STANDARD) */
-    double beta_shear;            /* s, 0 = off: shear damping, a viscous
+    double beta_shear;            /* s, 0 = off: the internal shear
+                                     damping (MODEL.md 3.6), a viscous
                                      shear force per length beta_shear G0
                                      dgamma/dt, G0 the initial slope of the
-                                     shear curve (last, so that positional
-                                     initialisers leave it 0) */
+                                     shear curve; DRAPE_SCENE_DAMPING_SHEAR_FABRIC
+                                     (-1) = the fabric's damping_shear (last,
+                                     so that positional initialisers leave
+                                     it 0) */
 } drape_model_opts;
 
 /* Options from a scene (terms, form, damping, standard gravity). */

@@ -75,6 +75,14 @@ extern const char *const drape_method_names[];
 #define DRAPE_SCENE_SEED_MAX 9007199254740991UL
 #define DRAPE_SCENE_SEED_MAX_TEXT "2^53 - 1 (9007199254740991)"
 
+/* perturbation.kind (MODEL.md section 2): the smooth random height field
+ * of perturbation.h, or amplitude * U(-1, 1) on each free particle. */
+typedef enum drape_perturb_kind {
+    DRAPE_PERTURB_FIELD = 0,
+    DRAPE_PERTURB_PARTICLE = 1
+} drape_perturb_kind;
+extern const char *const drape_perturb_kind_names[]; /* "field", "particle", NULL */
+
 typedef enum drape_table_shape { DRAPE_TABLE_SQUARE, DRAPE_TABLE_ROUND } drape_table_shape;
 
 /* Where a key was written in the scene file (1-based; 0 if unknown or
@@ -110,8 +118,15 @@ typedef struct drape_scene {
     double spacing;                /* lattice spacing sigma, m */
 
     int has_perturbation;
-    double perturb_amplitude;      /* m */
+    drape_perturb_kind perturb_kind; /* perturbation.kind (default field) */
+    double perturb_amplitude;      /* m: the field's RMS height; the
+                                      particle form's half range */
     unsigned long perturb_seed;
+    double perturb_lambda_min;     /* m, field: shortest wavelength; 0 =
+                                      DRAPE_FIELD_LAMBDA_MIN */
+    double perturb_lambda_max;     /* m, field: longest wavelength; 0 = the
+                                      specimen's largest dimension */
+    int perturb_modes;             /* field: plane waves; 0 = DRAPE_FIELD_MODES */
 
     int n_pins;
     int pins[DRAPE_SCENE_MAX_PINS][2]; /* (i, j); negative counts from the end */
@@ -121,7 +136,11 @@ typedef struct drape_scene {
 
     double damping_air;            /* 1/s, 0 = off */
     double damping_edge;           /* N.s/m, 0 = off */
-    double damping_shear;          /* s, 0 = off: shear damping (docs/model.md) */
+    double damping_shear;          /* s, 0 = off: the internal shear damping
+                                      (MODEL.md 3.6); < 0
+                                      (DRAPE_SCENE_DAMPING_SHEAR_FABRIC, the
+                                      loader's default) = the fabric's, see
+                                      drape_scene_damping_shear */
 
     char integrator[DRAPE_INTEGRATOR_NAME_MAX]; /* default "auto" */
     double rtol, atol;             /* defaults 1e-4, 1e-7 */
@@ -178,6 +197,22 @@ typedef struct drape_scene {
     drape_scene_pos at_spacing, at_pins, at_support, at_table, at_overhang,
         at_specimen;
 } drape_scene;
+
+/* scene.damping_shear when neither the scene nor the command line gives
+ * one: the fabric's own (drape_fabric.damping_shear). */
+#define DRAPE_SCENE_DAMPING_SHEAR_FABRIC (-1.0)
+
+/* The internal shear damping beta (s) a run of scene s on fabric f uses:
+ * the scene's (a scene key or --damping-shear) when it gives one (>= 0),
+ * else the fabric's.  f may be NULL (then 0 where the scene gives none). */
+double drape_scene_damping_shear(const drape_scene *s, const drape_fabric *f);
+
+/* The band of the perturbation field a run of s draws: lambda_min,
+ * lambda_max (m) and the number of plane waves, each the scene's or its
+ * default (the longest: the specimen's largest dimension, and never
+ * shorter than the shortest). */
+void drape_scene_perturbation_band(const drape_scene *s, double *lambda_min,
+                                   double *lambda_max, int *modes);
 
 /* Known integrator names, NULL-terminated (for validation and --help). */
 extern const char *const drape_integrator_names[];
