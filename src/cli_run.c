@@ -868,7 +868,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     if (!child && out_dir && have_dc &&
         (s.kind == DRAPE_SCENE_CUSICK || s.kind == DRAPE_SCENE_TABLE)) {
         int na = 0;
-        const double *rad = drape_dc_radii(dc, &na);
+        const double *rad = drape_dc_outline(dc, &na);
         drape_svg_specimen sv = {one.seed, one.dc, one.nodes, sh.centre_m[0], sh.centre_m[1],
                                  rad, na, sh.node_threshold_m, one.seed_unknown};
         if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
@@ -904,7 +904,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         drape_cli_result_write(child->out, &r);
         if (have_dc) {
             int na = 0;
-            const double *rad = drape_dc_radii(dc, &na);
+            const double *rad = drape_dc_outline(dc, &na);
             fprintf(child->out, "@shadow\t%.9g %.9g %d %.9g", sh.centre_m[0], sh.centre_m[1], na,
                     sh.node_threshold_m);
             for (int k = 0; k < na; k++) fprintf(child->out, " %.6g", rad[k]);
