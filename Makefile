@@ -13,6 +13,9 @@
 #                  installs gnuplot-nox when missing; docs/performance.md)
 #   make bench-ensemble  the drape test, accurate against fast ensembles
 #                  (issue 15) -> docs/performance.md (1-2 h of CPU)
+#   make bench-convergence  the drape test against the lattice spacing on
+#                  three fabrics -> docs/convergence.md (hours of CPU,
+#                  resumable)
 #   make check-hard  the hard-case suite tests/hard/ (docs/stability.md)
 #   make check-default  the default Cusick scene, dynamic at 1 cm, must reach
 #                  equilibrium (~150 s CPU; in CI)
@@ -84,7 +87,7 @@ TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/
 HEADERS  = $(wildcard include/drape/*.h src/*.h)
 
 .PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
-        bench-ensemble bench-animate check-install \
+        bench-ensemble bench-convergence bench-animate check-install \
         asan valgrind fuzz install uninstall clean FORCE
 
 all: drape
@@ -166,6 +169,11 @@ bench: drape
 # Accurate against fast drape-test ensembles (issue 15; docs/ensemble.md).
 bench-ensemble: drape
 	scripts/bench-ensemble.sh
+
+# The drape test against the lattice spacing (docs/convergence.md; hours
+# of CPU: resumable, see scripts/bench-convergence.sh).
+bench-convergence: drape
+	scripts/bench-convergence.sh
 
 # The animate method against backward Euler, and where its time goes
 # (issue 16; docs/animate.md).

@@ -92,7 +92,10 @@ const char *const drape_cli_run_keys[] = {
     /* the perturbation that ran (MODEL.md 2): its form, RMS height (field)
      * or half range (particle), and the field's band of wavelengths */
     "perturbation_kind", "perturbation_amplitude_m", "perturbation_lambda_min_m",
-    "perturbation_lambda_max_m", NULL};
+    "perturbation_lambda_max_m",
+    /* --convergence (cli_convergence.c): the same specimens at a spacing
+     * sqrt(2) coarser; null without it */
+    "spacing_coarse_m", "dc_spacing_delta", "dc_spacing_delta_ci95", "nodes_spacing_p", NULL};
 
 int drape_cli_run_nkeys(void)
 {
@@ -817,6 +820,14 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                              s.has_perturbation ? s.perturb_amplitude : NAN);
         drape_cli_result_num(&r, "perturbation_lambda_min_m", lo);
         drape_cli_result_num(&r, "perturbation_lambda_max_m", hi);
+    }
+    {
+        /* this specimen as an ensemble of one, against the coarse one */
+        drape_ensemble_stats one_st;
+        double one_dc = one.dc;
+        int one_nodes = one.nodes;
+        drape_ensemble_stats_compute(&one_dc, &one_nodes, 1, &one_st);
+        drape_cli_convergence_keys(&r, ra->coarse, &one_st);
     }
     if (!drape_cli_result_check_keys(&r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,

@@ -8,6 +8,7 @@
 #include <stdio.h>
 
 #include "cli_result.h"
+#include "drape/ensemble.h"
 #include "drape/error.h"
 #include "drape/output.h"
 #include "drape/scene.h"
@@ -51,7 +52,27 @@ typedef struct run_args {
      * ensemble records them in its manifest (cli_specimens_record.c) */
     const char *given_name[RUN_GIVEN_MAX], *given_text[RUN_GIVEN_MAX];
     int n_given;
+    int convergence;          /* --convergence: the same specimens also at a
+                                 spacing sqrt(2) coarser (cli_convergence.c) */
+    const struct run_coarse *coarse; /* that ensemble's statistics, for the
+                                 result's dc_spacing_* keys; NULL: none */
 } run_args;
+
+/* The ensemble that --convergence ran at the coarser spacing. */
+typedef struct run_coarse {
+    double spacing_m;
+    drape_ensemble_stats st;
+} run_coarse;
+
+/* The result keys of --convergence from the coarse ensemble c and this
+ * run's statistics st (NaN where c is NULL): spacing_coarse_m,
+ * dc_spacing_delta (this mean - the coarse one), dc_spacing_delta_ci95
+ * (Welch), nodes_spacing_p (exact test of the node histograms). */
+void drape_cli_convergence_keys(drape_cli_result *r, const run_coarse *c,
+                                const drape_ensemble_stats *st);
+
+/* drape run --convergence: the coarse ensemble, then this one. */
+int drape_cli_convergence_run(const run_args *a);
 
 /* Every field not given: 0, NULL, or the "the scene's" value. */
 void drape_cli_run_args_init(run_args *ra);

@@ -48,7 +48,9 @@ static const char run_usage[] =
     "max_strain_peak, terms, damping_shear_s, the perturbation\n"
     "(perturbation_kind field or particle, perturbation_amplitude_m,\n"
     "perturbation_lambda_min_m, perturbation_lambda_max_m); null where the\n"
-    "scene does not produce one; docs/outputs.md).  status is equilibrium,\n"
+    "scene does not produce one; docs/outputs.md), and with --convergence\n"
+    "spacing_coarse_m, dc_spacing_delta, dc_spacing_delta_ci95 and\n"
+    "nodes_spacing_p (below).  status is equilibrium,\n"
     "t_max, failed or interrupted.\n"
     "\n"
     "Repeated specimens (scene key `specimens: N`, or --specimens N): a drape\n"
@@ -149,6 +151,14 @@ static const char run_usage[] =
     "  --specimens N            repeated specimens (scene: specimens, default 1)\n"
     "  -j, --jobs N             specimens run at a time (default 0: one per core)\n"
     "  --seed N                 perturbation seed (of the first specimen)\n"
+    "  --convergence            is the spacing fine enough?  Run the same\n"
+    "                           specimens first at a spacing sqrt(2) coarser, and\n"
+    "                           add spacing_coarse_m, dc_spacing_delta (mean DC\n"
+    "                           here minus there), dc_spacing_delta_ci95 (its 95 %\n"
+    "                           half-width, Welch) and nodes_spacing_p (the node\n"
+    "                           histograms' exact test): converged where |delta|\n"
+    "                           < 0.01 and p >= 0.05 (docs/convergence.md); not\n"
+    "                           with --out\n"
     "  --terms LIST             energy terms, comma-separated: stretch, bend, shear,\n"
     "                           gravity, bias (scene: model.terms; default all;\n"
     "                           bias, the twist that makes a fabric's measured bias\n"
@@ -405,7 +415,7 @@ int drape_cli_run_option_same(const char *name, const char *a, const char *b)
 int drape_cli_run(int argc, char **argv)
 {
     /* the options that set a value of the run: drape_cli_run_option */
-    enum { O_FABRIC = 1000, O_OUT, O_FORMAT, O_RESUME, O_VALUE };
+    enum { O_FABRIC = 1000, O_OUT, O_FORMAT, O_RESUME, O_VALUE, O_CONVERGENCE };
     static const struct option opts[] = {
         {"fabric", required_argument, NULL, O_FABRIC},
         {"integrator", required_argument, NULL, O_VALUE},
@@ -434,6 +444,7 @@ int drape_cli_run(int argc, char **argv)
         {"fall-step", required_argument, NULL, O_VALUE},
         {"substeps", required_argument, NULL, O_VALUE},
         {"format", required_argument, NULL, O_FORMAT},
+        {"convergence", no_argument, NULL, O_CONVERGENCE},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -477,6 +488,7 @@ int drape_cli_run(int argc, char **argv)
             else if (strcmp(optarg, "csv") == 0) csv = 1;
             else return usage_error("--format: expected json or csv, got `%s'%s", optarg, "");
             break;
+        case O_CONVERGENCE: ra.convergence = 1; break;
         case 'q': quiet = 1; break;
         case 'h': fputs(run_usage, stdout); return 0;
         default:
@@ -535,5 +547,9 @@ int drape_cli_run(int argc, char **argv)
             return drape_cli_specimens_resume(&ra); /* (refused without a manifest) */
         return drape_cli_run_one(&ra, NULL);
     }
-    return drape_cli_specimens_run(&ra);
+    if (ra.convergence && out_dir)
+        return usage_error("--convergence: not with --out (run the coarser spacing as an "
+                           "ensemble of its own with --out to keep it: docs/convergence.md)%s%s",
+                           "", "");
+    return ra.convergence ? drape_cli_convergence_run(&ra) : drape_cli_specimens_run(&ra);
 }

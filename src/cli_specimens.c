@@ -300,7 +300,8 @@ typedef struct ens_ident {
 static void build_result(drape_cli_result *r, child *ch, int n, const child *first,
                          const drape_ensemble_stats *st, int n_failed, int interrupted,
                          double wall_s, double cpu_prev, unsigned long seed0,
-                         drape_cli_specimen *spec, const ens_ident *id)
+                         drape_cli_specimen *spec, const ens_ident *id,
+                         const run_coarse *coarse)
 {
     memset(r, 0, sizeof *r);
     int all_eq = 1, n_ok = 0, all_min = 1, any_cert = 0;
@@ -323,7 +324,13 @@ static void build_result(drape_cli_result *r, child *ch, int n, const child *fir
         const drape_cli_field *proto =
             first ? drape_cli_result_find(&first->res, key) : NULL;
         int rule = rule_of(key);
-        if (strcmp(key, "status") == 0) {
+        if (strcmp(key, "spacing_coarse_m") == 0) {
+            drape_cli_convergence_keys(r, coarse, st); /* and the three after it */
+        } else if (strcmp(key, "dc_spacing_delta") == 0 ||
+                   strcmp(key, "dc_spacing_delta_ci95") == 0 ||
+                   strcmp(key, "nodes_spacing_p") == 0) {
+            continue;
+        } else if (strcmp(key, "status") == 0) {
             drape_cli_result_str(r, jkey, interrupted ? "interrupted"
                                           : n_ok == 0  ? "failed"
                                           : all_eq     ? "equilibrium"
@@ -836,7 +843,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
     ens_ident id = {fabric_name[0] ? fabric_name : NULL, drape_scene_kind_name(s.kind),
                     s.spacing};
     build_result(r, ch, n, proto, &st, n_failed, interrupted, wall + wall_prev, cpu_prev,
-                 seed0, spec, &id);
+                 seed0, spec, &id, a->coarse);
     if (!drape_cli_result_check_keys(r)) {
         drape_error_set(&err, DRAPE_E_INTERNAL, NULL, 0, 0, NULL,
                         "ensemble result fields differ from drape_cli_run_keys");

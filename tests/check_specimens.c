@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <cairo.h>
+#include <gsl/gsl_cdf.h>
 #include <json-c/json.h>
 #include <libxml/parser.h>
 #include <libxml/xpath.h>
@@ -995,6 +996,85 @@ START_TEST(test_bias_warnings_with_term)
 }
 END_TEST
 
+/* drape run --convergence (docs/convergence.md): the same specimens at a
+ * spacing sqrt(2) coarser.  Against the two ensembles run on their own:
+ * dc_spacing_delta is the difference of their means, its 95 % half-width
+ * Welch's (t quantile from GSL, Welch-Satterthwaite degrees of freedom,
+ * computed here from the specimens' DCs), nodes_spacing_p 1 for equal
+ * histograms and in [0, 1]; null keys without the option; one specimen:
+ * no interval; refused with --out (exit 2). */
+static double welch_ci(const double *a, int na, const double *b, int nb)
+{
+    double ma = 0, mb = 0, va = 0, vb = 0;
+    for (int k = 0; k < na; k++) ma += a[k] / na;
+    for (int k = 0; k < nb; k++) mb += b[k] / nb;
+    for (int k = 0; k < na; k++) va += (a[k] - ma) * (a[k] - ma) / (na - 1);
+    for (int k = 0; k < nb; k++) vb += (b[k] - mb) * (b[k] - mb) / (nb - 1);
+    double qa = va / na, qb = vb / nb;
+    double nu = (qa + qb) * (qa + qb) / (qa * qa / (na - 1) + qb * qb / (nb - 1));
+    return gsl_cdf_tdist_Pinv(0.975, nu) * sqrt(qa + qb);
+}
+
+static int specimen_dcs(json_object *o, double *dc, int max)
+{
+    json_object *sp, *e, *v;
+    ck_assert(json_object_object_get_ex(o, "specimens", &sp) && sp);
+    int n = (int)json_object_array_length(sp);
+    ck_assert_int_le(n, max);
+    for (int k = 0; k < n; k++) {
+        e = json_object_array_get_idx(sp, (size_t)k);
+        ck_assert(json_object_object_get_ex(e, "dc", &v) && v);
+        dc[k] = json_object_get_double(v);
+    }
+    return n;
+}
+
+START_TEST(test_convergence_option)
+{
+    char args[4096];
+    const char *base = "run -q ../scenes/cusick.yaml --specimens 4 -j 2 --seed 3";
+    json_object *o[3];
+    double dcs[3][8];
+    int n[3];
+    const char *extra[3] = {" --spacing 2cm --convergence", " --spacing 2cm",
+                            " --spacing 0.028284271247461901m"};
+    for (int k = 0; k < 3; k++) {
+        snprintf(args, sizeof args, "%s%s", base, extra[k]);
+        ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+        o[k] = json_tokener_parse(out);
+        ck_assert_msg(o[k] != NULL, "%s", out);
+        n[k] = specimen_dcs(o[k], dcs[k], 8);
+    }
+    ck_assert(n[0] == 4 && n[1] == 4 && n[2] == 4);
+    for (int j = 0; j < 4; j++) ck_assert(dcs[0][j] == dcs[1][j]); /* the same specimens */
+    double m1 = 0, m2 = 0;
+    for (int j = 0; j < 4; j++) m1 += dcs[1][j] / 4, m2 += dcs[2][j] / 4;
+    /* the DCs are printed to 10 digits */
+    ck_assert_msg(fabs(jnum(o[0], "dc_spacing_delta") - (m1 - m2)) < 1e-9,
+                  "delta %.17g, expected %.17g", jnum(o[0], "dc_spacing_delta"), m1 - m2);
+    ck_assert(fabs(m1 - m2) > 1e-4); /* the spacing moves the DC */
+    double ci = welch_ci(dcs[2], 4, dcs[1], 4);
+    ck_assert_msg(fabs(jnum(o[0], "dc_spacing_delta_ci95") - ci) < 1e-7 * ci,
+                  "ci %.17g, expected %.17g", jnum(o[0], "dc_spacing_delta_ci95"), ci);
+    ck_assert(fabs(jnum(o[0], "spacing_coarse_m") - 0.02 * sqrt(2.0)) < 1e-11);
+    double p = jnum(o[0], "nodes_spacing_p");
+    ck_assert(p >= 0.0 && p <= 1.0);
+    ck_assert(isnan(jnum(o[1], "dc_spacing_delta")) && isnan(jnum(o[1], "spacing_coarse_m")) &&
+              isnan(jnum(o[1], "nodes_spacing_p")));
+    for (int k = 0; k < 3; k++) json_object_put(o[k]);
+    /* one specimen: a difference, no interval */
+    ck_assert_msg(tu_run_drape("run -q ../scenes/cusick.yaml --method static --specimens 1 "
+                               "--spacing 3cm --convergence", out, CAP, err, CAP) == 0, "%s", err);
+    json_object *one = json_tokener_parse(out);
+    ck_assert_ptr_nonnull(one);
+    ck_assert(isfinite(jnum(one, "dc_spacing_delta")) && isnan(jnum(one, "dc_spacing_delta_ci95")));
+    json_object_put(one);
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/cusick.yaml --spacing 3cm --convergence --out x",
+                                  out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "--convergence") && !out[0], "%s", err);
+}
+END_TEST
+
 Suite *specimens_suite(void)
 {
     Suite *s = suite_create("specimens");
@@ -1013,6 +1093,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_fall_retry);
     tcase_add_test(tc, test_fall_energy_balance);
     tcase_add_test(tc, test_fall_pumped);
+    tcase_add_test(tc, test_convergence_option);
     tcase_add_test(tc, test_compare_distributions);
     tcase_add_test(tc, test_bias_warnings_with_term);
     suite_add_tcase(s, tc);
