@@ -114,6 +114,7 @@ int drape_cli_convergence_run(const run_args *a)
     ca.coarse = NULL;
     ca.spacing = c.spacing_m;
     ca.csv = 0;
+    ca.text = 0; /* JSON on the pipe, whatever the terminal */
     ca.quiet = 1;
     int g = 0;
     while (g < ca.n_given && strcmp(ca.given_name[g], "spacing") != 0) g++;

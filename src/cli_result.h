@@ -74,6 +74,8 @@ int drape_cli_result_check_keys(const drape_cli_result *r);
  * JSON cannot be built (out of memory). */
 int drape_cli_result_print_json(FILE *out, const drape_cli_result *r);
 void drape_cli_result_print_csv(FILE *out, const drape_cli_result *r);
+/* A few lines for a person (cli_summary.c): `--format text`. */
+void drape_cli_result_print_text(FILE *out, const drape_cli_result *r);
 
 /* The child-to-parent line format: "key\ttype\tvalue\n" per field (numbers
  * with %.17g, so nothing is lost), structured fields left out.

@@ -923,6 +923,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         }
     } else if (csv) {
         drape_cli_result_print_csv(stdout, &r);
+    } else if (ra->text) {
+        drape_cli_result_print_text(stdout, &r);
     } else if (drape_cli_result_print_json(stdout, &r) != 0) {
         goto nomem;
     }

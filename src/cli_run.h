@@ -26,6 +26,7 @@ typedef struct run_args {
     long max_steps;
     int max_order, linsol, method; /* method: drape_method */
     int csv, quiet;
+    int text;                 /* --format text (the default on a terminal) */
     int has_seed;
     unsigned long seed;       /* --seed: perturbation.seed */
     double fall_time, fall_step; /* s */

@@ -25,7 +25,7 @@
 
 static const char run_usage[] =
     "Usage: drape run [SCENE.yaml] [OPTIONS]\n"
-    "       drape run --resume DIR [--format json|csv] [-q] [-j N]\n"
+    "       drape run --resume DIR [--format json|csv|text] [-q] [-j N]\n"
     "\n"
     "Run a scene (default " DEFAULT_SCENE ") and print one JSON object on\n"
     "stdout with the result in SI units (keys: fabric, scene, integrator,\n"
@@ -173,7 +173,9 @@ static const char run_usage[] =
     "                           from DIR/drape.h5, with the options stored there;\n"
     "                           an ensemble's DIR (with --out DIR): from\n"
     "                           DIR/ensemble.json, its finished specimens kept\n"
-    "  --format json|csv        result format on stdout (default json)\n"
+    "  --format json|csv|text   result format on stdout: JSON (the default\n"
+    "                           when stdout is not a terminal), CSV, or a few\n"
+    "                           lines for a person (the default on a terminal)\n"
     "  -q, --quiet              no progress on stderr\n"
     "  -h, --help               show this help\n"
     "\n"
@@ -449,7 +451,7 @@ int drape_cli_run(int argc, char **argv)
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
     const char *fabric_path = NULL, *out_dir = NULL, *resume_dir = NULL, *run_opt = NULL;
-    int csv = 0, quiet = 0, c, li;
+    int fmt = -1, quiet = 0, c, li; /* 0 json, 1 csv, 2 text; -1 not given */
     run_args ra;
     drape_cli_run_args_init(&ra);
     while ((c = getopt_long(argc, argv, "qhj:", opts, &li)) != -1) {
@@ -484,9 +486,10 @@ int drape_cli_run(int argc, char **argv)
                                    "4096", optarg);
             break;
         case O_FORMAT:
-            if (strcmp(optarg, "json") == 0) csv = 0;
-            else if (strcmp(optarg, "csv") == 0) csv = 1;
-            else return usage_error("--format: expected json or csv, got `%s'%s", optarg, "");
+            if (strcmp(optarg, "json") == 0) fmt = 0;
+            else if (strcmp(optarg, "csv") == 0) fmt = 1;
+            else if (strcmp(optarg, "text") == 0) fmt = 2;
+            else return usage_error("--format: expected json, csv or text, got `%s'%s", optarg, "");
             break;
         case O_CONVERGENCE: ra.convergence = 1; break;
         case 'q': quiet = 1; break;
@@ -527,7 +530,10 @@ int drape_cli_run(int argc, char **argv)
     ra.fabric_path = fabric_path;
     ra.out_dir = out_dir;
     ra.resume_dir = resume_dir;
-    ra.csv = csv;
+    /* a person at a terminal reads the summary; a pipe gets JSON */
+    if (fmt < 0) fmt = isatty(STDOUT_FILENO) ? 2 : 0;
+    ra.csv = fmt == 1;
+    ra.text = fmt == 2;
     ra.quiet = quiet;
     if (resume_dir) {
         drape_error derr;

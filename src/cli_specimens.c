@@ -854,6 +854,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         drape_cli_write_shadow(a->out_dir, &s, sv, n, r, &err) != 0)
         goto fail;
     if (a->csv) drape_cli_result_print_csv(stdout, r);
+    else if (a->text) drape_cli_result_print_text(stdout, r);
     else if (drape_cli_result_print_json(stdout, r) != 0) {
         drape_error_set(&err, DRAPE_E_NOMEM, NULL, 0, 0, NULL, "out of memory");
         goto fail;

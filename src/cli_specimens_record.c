@@ -451,6 +451,7 @@ int drape_cli_specimens_resume(const run_args *a)
         status = drape_error_exit_status(err.kind);
     } else {
         ra.csv = a->csv;
+        ra.text = a->text;
         ra.quiet = a->quiet;
         ra.jobs = a->jobs;
         status = drape_cli_specimens_drive(&ra, &m);

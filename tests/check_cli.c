@@ -295,12 +295,67 @@ START_TEST(test_bad_corpus)
 }
 END_TEST
 
+/* The summary for a person (--format text; the default when stdout is a
+ * terminal): its numbers are the JSON result's (the DC to three digits,
+ * its interval, each histogram bar's count and share, the modal count),
+ * and on a pipe the default stays JSON.  The terminal is a pseudo-terminal
+ * made by script(1). */
+START_TEST(test_format_text)
+{
+    const char *args = "run -q ../scenes/cusick.yaml --spacing 3cm --specimens 3 -j 1";
+    char cmd[4096];
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    json_object *o = json_tokener_parse(out), *v, *h;
+    ck_assert_msg(o != NULL, "default on a pipe is not JSON: %s", out);
+    ck_assert(json_object_object_get_ex(o, "dc", &v));
+    double dc = json_object_get_double(v);
+    ck_assert(json_object_object_get_ex(o, "dc_ci95", &v));
+    double ci = json_object_get_double(v);
+    ck_assert(json_object_object_get_ex(o, "nodes_hist", &h));
+    snprintf(cmd, sizeof cmd, "%s --format text", args);
+    ck_assert_int_eq(tu_run_drape(cmd, out, CAP, err, CAP), 0);
+    char want[128];
+    snprintf(want, sizeof want, "drape coefficient  %.3f +- %.3f (95 %% interval of the mean of 3 "
+             "specimens)", dc, ci);
+    ck_assert_msg(strstr(out, want) && strstr(out, "cotton-breen on the cusick scene, spacing 3 cm"),
+                  "%s\nwanted: %s", out, want);
+    json_object_object_foreach(h, k, c) {
+        int n = json_object_get_int(c);
+        snprintf(want, sizeof want, "# %d (%.0f %%)\n", n, 100.0 * n / 3);
+        char *line = strstr(out, want);
+        ck_assert_msg(line != NULL, "no bar for %s nodes: %s", k, out);
+        while (line > out && line[-1] != '\n') line--;
+        ck_assert_int_eq(atoi(line), atoi(k));
+    }
+    ck_assert_msg(strstr(out, "status             equilibrium") && strstr(out, "CPU "), "%s", out);
+    json_object_put(o);
+    /* on a terminal: the summary by default, JSON when asked for */
+    snprintf(cmd, sizeof cmd, "script -qec '%s %s' /dev/null", tu_drape_bin(), args);
+    FILE *p = popen(cmd, "r");
+    ck_assert_ptr_nonnull(p);
+    size_t n = fread(out, 1, CAP - 1, p);
+    out[n] = 0;
+    ck_assert_int_eq(pclose(p), 0);
+    ck_assert_msg(strstr(out, "drape coefficient") && !strchr(out, '{'), "%s", out);
+    snprintf(cmd, sizeof cmd, "script -qec '%s %s --format json' /dev/null", tu_drape_bin(), args);
+    p = popen(cmd, "r");
+    ck_assert_ptr_nonnull(p);
+    n = fread(out, 1, CAP - 1, p);
+    out[n] = 0;
+    ck_assert_int_eq(pclose(p), 0);
+    ck_assert_msg(strstr(out, "{ \"fabric\"") && !strstr(out, "drape coefficient"), "%s", out);
+    ck_assert_int_eq(tu_run_drape("run --format xml", out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "json, csv or text"), "%s", err);
+}
+END_TEST
+
 Suite *cli_suite(void)
 {
     Suite *s = suite_create("cli");
     TCase *tc = tcase_create("cli");
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, test_help_version);
+    tcase_add_test(tc, test_format_text);
     tcase_add_test(tc, test_usage_errors);
     tcase_add_test(tc, test_empty_dir_options);
     tcase_add_test(tc, test_data_dirs);
