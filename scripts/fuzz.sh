@@ -37,7 +37,7 @@ if ! command -v "$CC" >/dev/null 2>&1 || ! probe; then
 fi
 
 # Only what the harnesses need: the loaders, their helpers and the lattice.
-LIB="src/alloc.c src/error.c src/units.c src/yamldoc.c src/fit.c src/fabric.c src/scene.c src/scene_check.c src/yread.c src/lattice.c src/lattice_check.c"
+LIB="src/alloc.c src/error.c src/units.c src/yamldoc.c src/fit.c src/fabric.c src/scene.c src/scene_check.c src/yread.c src/perturbation.c src/lattice.c src/lattice_check.c"
 SAN="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 cat > "$O/extra.mk" <<'MK'
 $(O)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_common.h $(O)/libdrape.a
