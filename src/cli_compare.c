@@ -27,6 +27,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <unistd.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -39,7 +40,7 @@
 #include "drape/scene.h"
 
 static const char compare_usage[] =
-    "Usage: drape compare REFERENCE.json OTHER.json\n"
+    "Usage: drape compare [--format json|text] REFERENCE.json OTHER.json\n"
     "\n"
     "Compare two drape tests: the results of `drape run` (one JSON object\n"
     "each, e.g. ensembles of --specimens N).  Prints one JSON object with\n"
@@ -56,6 +57,10 @@ static const char compare_usage[] =
     "cpu_per_specimen_s, fabric, scene, energy_form, terms, spacing_m, in the\n"
     "objects `reference` and `other`.  A p value below 0.05 means the two\n"
     "differ at the 5 % level (docs/ensemble.md).\n"
+    "\n"
+    "  --format json|text   JSON (the default when stdout is not a terminal),\n"
+    "                       or a few lines for a person with the verdict in\n"
+    "                       words (the default on a terminal)\n"
     "\n"
     "Exit status: 0 success, 1 a file is not a drape result, 2 bad command\n"
     "line, 3 a file cannot be read.\n";
@@ -207,8 +212,108 @@ static json_object *side_json(const side *s)
     return o;
 }
 
+static void hist_text(const side *s, char *b, size_t cap)
+{
+    size_t n = 0;
+    b[0] = 0;
+    for (int k = 0; k <= DRAPE_ENSEMBLE_MAX_NODES && n + 1 < cap; k++) {
+        if (!s->st.hist[k]) continue;
+        int w = snprintf(b + n, cap - n, "%s%d: %d", n ? ", " : "{", k, s->st.hist[k]);
+        if (w < 0 || (size_t)w >= cap - n) break;
+        n += (size_t)w;
+    }
+    if (n + 2 < cap) snprintf(b + n, cap - n, n ? "}" : "{}");
+}
+
+static void dc_text(const side *s, char *b, size_t cap)
+{
+    if (!isfinite(s->st.dc_mean)) snprintf(b, cap, "none");
+    else if (isfinite(s->st.dc_ci95)) snprintf(b, cap, "%.3f +- %.3f", s->st.dc_mean, s->st.dc_ci95);
+    else snprintf(b, cap, "%.3f", s->st.dc_mean);
+}
+
+/* p as a person reads it; "n/a" where the test has nothing to go on */
+static const char *p_text(double p, char *b, size_t cap)
+{
+    if (!isfinite(p)) snprintf(b, cap, "n/a");
+    else snprintf(b, cap, "%.3g", p);
+    return b;
+}
+
+/* The summary for a person (--format text): the two drape tests side by
+ * side, the difference of the means and the verdict of the three tests
+ * at the 5 % level in words. */
+static void print_text(const char *ref, const char *oth, const side *a, const side *b,
+                       double diff, double diff_ci, double p_nodes, double p_mean,
+                       double p_dist, int same)
+{
+    char x[160], y[160], q[3][32];
+    printf("reference  %s: %s, %s, spacing %.3g cm\n", ref, a->what[0] ? a->what[0] : "?",
+           a->what[1] ? a->what[1] : "?", 100.0 * a->spacing_m);
+    printf("other      %s: %s, %s, spacing %.3g cm\n", oth, b->what[0] ? b->what[0] : "?",
+           b->what[1] ? b->what[1] : "?", 100.0 * b->spacing_m);
+    printf("                     %-30s %s\n", "reference", "other");
+    printf("  specimens          %-30d %d\n", a->st.n, b->st.n);
+    dc_text(a, x, sizeof x);
+    dc_text(b, y, sizeof y);
+    printf("  drape coefficient  %-30s %s   (mean +- 95 %% interval)\n", x, y);
+    hist_text(a, x, sizeof x);
+    hist_text(b, y, sizeof y);
+    printf("  nodes              %-30s %s   {nodes: specimens}\n", x, y);
+    snprintf(x, sizeof x, "%.3g s", a->cpu_per);
+    snprintf(y, sizeof y, "%.3g s", b->cpu_per);
+    printf("  CPU per specimen   %-30s %s\n", x, y);
+    if (isfinite(diff))
+        printf("  difference         %+.4f +- %.4f (other - reference, 95 %% interval)\n", diff,
+               isfinite(diff_ci) ? diff_ci : NAN);
+    p_text(p_nodes, q[0], sizeof q[0]);
+    p_text(p_mean, q[1], sizeof q[1]);
+    p_text(p_dist, q[2], sizeof q[2]);
+    int apart = (isfinite(p_nodes) && p_nodes < 0.05) || (isfinite(p_mean) && p_mean < 0.05) ||
+                (isfinite(p_dist) && p_dist < 0.05);
+    printf("  verdict            %s at the 5 %% level (p: node histograms %s, means %s, DC "
+           "distributions %s)\n",
+           apart ? "distinguished" : "not distinguished", q[0], q[1], q[2]);
+    if (isfinite(diff))
+        printf("                     the means differ by %s 0.01\n",
+               fabs(diff) < 0.01 ? "less than" : "at least");
+    if (!same) printf("  note               the two are not of the same case (warnings above)\n");
+}
+
 int drape_cli_compare(int argc, char **argv)
 {
+    /* --format json|text (or --format=...), anywhere before the files */
+    int fmt = -1;
+    for (int i = 1; i < argc; i++) {
+        const char *v = NULL;
+        int drop = 0;
+        if (strcmp(argv[i], "--format") == 0) {
+            if (i + 1 >= argc) {
+                fputs("drape compare: --format: expected json or text\nTry `drape compare "
+                      "--help'.\n", stderr);
+                return drape_error_exit_status(DRAPE_E_USAGE);
+            }
+            v = argv[i + 1];
+            drop = 2;
+        } else if (strncmp(argv[i], "--format=", 9) == 0) {
+            v = argv[i] + 9;
+            drop = 1;
+        } else if (strcmp(argv[i], "--") == 0) {
+            break;
+        }
+        if (!drop) continue;
+        if (strcmp(v, "json") == 0) fmt = 0;
+        else if (strcmp(v, "text") == 0) fmt = 1;
+        else {
+            fprintf(stderr, "drape compare: --format: expected json or text, got `%s'\nTry "
+                    "`drape compare --help'.\n", v);
+            return drape_error_exit_status(DRAPE_E_USAGE);
+        }
+        for (int k = i; k + drop <= argc; k++) argv[k] = argv[k + drop];
+        argc -= drop;
+        i--;
+    }
+    if (fmt < 0) fmt = isatty(STDOUT_FILENO) ? 1 : 0;
     if (argc == 2 && (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0)) {
         fputs(compare_usage, stdout);
         return 0;
@@ -253,14 +358,21 @@ int drape_cli_compare(int argc, char **argv)
         same = 0;
     }
     double diff = b.st.dc_mean - a.st.dc_mean;
+    double p_nodes = drape_ensemble_exact_p(a.st.hist, b.st.hist, DRAPE_ENSEMBLE_MAX_NODES + 1);
+    double p_mean = drape_ensemble_welch_p(&a.st, &b.st);
+    double p_dist = drape_ensemble_ks_p(a.dc, a.ndc, b.dc, b.ndc);
+    double diff_ci = drape_ensemble_welch_ci95(&a.st, &b.st);
+    if (fmt == 1) {
+        print_text(argv[1], argv[2], &a, &b, diff, diff_ci, p_nodes, p_mean, p_dist, same);
+        if (fflush(stdout) != 0) status = drape_error_exit_status(DRAPE_E_IO);
+        goto out;
+    }
     json_object *o = json_object_new_object();
-    json_object_object_add(o, "p_nodes",
-                           dnum(drape_ensemble_exact_p(a.st.hist, b.st.hist,
-                                                       DRAPE_ENSEMBLE_MAX_NODES + 1)));
-    json_object_object_add(o, "p_mean", dnum(drape_ensemble_welch_p(&a.st, &b.st)));
-    json_object_object_add(o, "p_dc_dist", dnum(drape_ensemble_ks_p(a.dc, a.ndc, b.dc, b.ndc)));
+    json_object_object_add(o, "p_nodes", dnum(p_nodes));
+    json_object_object_add(o, "p_mean", dnum(p_mean));
+    json_object_object_add(o, "p_dc_dist", dnum(p_dist));
     json_object_object_add(o, "dc_diff", dnum(diff));
-    json_object_object_add(o, "dc_diff_ci95", dnum(drape_ensemble_welch_ci95(&a.st, &b.st)));
+    json_object_object_add(o, "dc_diff_ci95", dnum(diff_ci));
     json_object_object_add(o, "dc_in_ci95",
                            isfinite(a.st.dc_ci95) ? json_object_new_int(fabs(diff) <= a.st.dc_ci95)
                                                   : NULL);

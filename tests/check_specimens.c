@@ -944,6 +944,68 @@ START_TEST(test_compare_distributions)
 }
 END_TEST
 
+/* `drape compare --format text`: the numbers of the JSON verdict in words,
+ * on the hand-written samples of test_compare_distributions (the DC
+ * distributions differ, p_dc_dist < 0.05: "distinguished"; dc_diff 0.005
+ * with its hand-computed interval 0.010784) and on a sample against
+ * itself (every p is 1: "not distinguished"); a pseudo-terminal (script(1))
+ * gets the text by default, a pipe the JSON. */
+START_TEST(test_compare_text)
+{
+    char a[4096] = "{\"fabric\": \"cotton\", \"scene\": \"cusick\", \"spacing_m\": 0.005, "
+                   "\"specimens\": [",
+         b[4096] = "{\"fabric\": \"cotton\", \"scene\": \"cusick\", \"spacing_m\": 0.005, "
+                   "\"specimens\": [";
+    for (int k = 0; k < 24; k++) {
+        char e[200];
+        snprintf(e, sizeof e, "%s{\"seed\": %d, \"dc\": %.10f, \"nodes\": %d}", k ? ", " : "",
+                 k + 1, k < 12 ? 0.40 : 0.45, k < 12 ? 4 : 5);
+        strcat(a, e);
+        snprintf(e, sizeof e, "%s{\"seed\": %d, \"dc\": 0.43, \"nodes\": %d}", k ? ", " : "",
+                 k + 1, k < 12 ? 4 : 5);
+        strcat(b, e);
+    }
+    strcat(a, "], \"cpu_s\": 24}");
+    strcat(b, "], \"cpu_s\": 12}");
+    char pa[512], pb[512], args[1200];
+    snprintf(pa, sizeof pa, "%s", tu_write_file("ref.json", a));
+    snprintf(pb, sizeof pb, "%s", tu_write_file("other.json", b));
+    snprintf(args, sizeof args, "compare --format text %s %s", pa, pb);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_msg(strstr(out, "difference         +0.0050 +- 0.0108 (other - reference") &&
+                      strstr(out, "0.425 +- ") && strstr(out, "0.430") &&
+                      strstr(out, "{4: 12, 5: 12}") && strstr(out, "CPU per specimen   1 s") &&
+                      strstr(out, "verdict            distinguished at the 5 % level (p: node "
+                                  "histograms 1, means ") &&
+                      strstr(out, "the means differ by less than 0.01"),
+                  "%s", out);
+    snprintf(args, sizeof args, "compare %s --format=text %s", pa, pa);
+    ck_assert_msg(tu_run_drape(args, out, CAP, err, CAP) == 0, "%s", err);
+    ck_assert_msg(strstr(out, "verdict            not distinguished at the 5 % level (p: node "
+                              "histograms 1, means 1, DC distributions 1)") &&
+                      strstr(out, "+0.0000 +- 0.0") && !strstr(out, "note"),
+                  "%s", out);
+    /* a pipe gets the JSON, a terminal the text */
+    snprintf(args, sizeof args, "compare %s %s", pa, pb);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 0);
+    json_object *o = json_tokener_parse(out);
+    ck_assert_msg(o != NULL, "%s", out);
+    ck_assert_double_eq_tol(jnum(o, "dc_diff"), 0.005, 1e-9);
+    json_object_put(o);
+    char cmd[2400];
+    snprintf(cmd, sizeof cmd, "script -qec '%s compare %s %s' /dev/null", tu_drape_bin(), pa, pb);
+    FILE *p = popen(cmd, "r");
+    ck_assert_ptr_nonnull(p);
+    size_t n = fread(out, 1, CAP - 1, p);
+    out[n] = 0;
+    ck_assert_int_eq(pclose(p), 0);
+    ck_assert_msg(strstr(out, "verdict") && !strstr(out, "\"p_nodes\""), "%s", out);
+    snprintf(args, sizeof args, "compare --format xml %s %s", pa, pb);
+    ck_assert_int_eq(tu_run_drape(args, out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "json or text"), "%s", err);
+}
+END_TEST
+
 /* compare reads numbers as import does: one outside the normal doubles,
  * anywhere in a result, is refused on its own text (exit 1, nothing on
  * stdout) at file:line:column with its key, places counted by hand; json-c
@@ -1099,6 +1161,7 @@ Suite *specimens_suite(void)
     suite_add_tcase(s, tc);
     TCase *cmp = tcase_create("compare"); /* quick: no run */
     tcase_add_test(cmp, test_compare_number_range);
+    tcase_add_test(cmp, test_compare_text);
     suite_add_tcase(s, cmp);
     return s;
 }
