@@ -132,11 +132,28 @@ static int fit_nonpositive(const drape_fit *fit, double *where, int *piece)
     return 0;
 }
 
+/* The slope jumps at the knots of the bending curves, gathered so that a
+ * file whose curves all have them (the tabulated curves of `drape import
+ * arcsim`, a stiffness interpolated linearly between measured points, so
+ * that the moment K k(K) is continuous and its slope is not) gets one
+ * line, not one per knot: how many, and the largest with its place. */
+typedef struct knot_jumps {
+    int n;                          /* knots whose slope jumps */
+    int curves;                     /* bit k: curve k (warp, weft, bias) has one */
+    double pct;                     /* the largest, % of its curve's largest slope */
+    const drape_ynode *node;        /* its piece */
+    char path[DRAPE_YREAD_PATH_MAX];
+    double x, sl, sr;               /* its knot (file units), slopes before and after */
+    char xname[64];
+} knot_jumps;
+
 /* Read one list of pieces (`bending.warp`) into *fit in the file's units,
- * check it (MODEL.md 3.4), and convert it to SI. */
+ * check it (MODEL.md 3.4), and convert it to SI.  Slope jumps at knots
+ * are warned about one by one, or, with kj, gathered into *kj (curve: its
+ * bit in kj->curves). */
 static int get_fit(const drape_yread *r, const drape_ynode *list,
                    const char *path, const fit_units *u,
-                   const char *yquantity, drape_fit *fit)
+                   const char *yquantity, drape_fit *fit, knot_jumps *kj, int curve)
 {
     static const char *const piece_keys[] = {"from", "to", "poly", NULL};
     const drape_ynode *to_node[DRAPE_FIT_MAX_PIECES];
@@ -283,7 +300,20 @@ static int get_fit(const drape_yread *r, const drape_ynode *list,
                 yquantity, x, u->xname, yl, u->yname, path, i - 1, yr, path,
                 i, yr - yl, u->yname, 100 * fabs(yr - yl) / vscale,
                 100 * DRAPE_FABRIC_KNOT_RTOL);
-        if (fabs(sr - sl) > DRAPE_FABRIC_KNOT_RTOL * sscale)
+        if (fabs(sr - sl) > DRAPE_FABRIC_KNOT_RTOL * sscale && kj) {
+            double pct = 100 * fabs(sr - sl) / sscale;
+            kj->n++;
+            kj->curves |= 1 << curve;
+            if (kj->n == 1 || pct > kj->pct) {
+                kj->pct = pct;
+                kj->node = list->items[i];
+                snprintf(kj->path, sizeof kj->path, "%s", pp);
+                kj->x = x;
+                kj->sl = sl;
+                kj->sr = sr;
+                snprintf(kj->xname, sizeof kj->xname, "%s", u->xname);
+            }
+        } else if (fabs(sr - sl) > DRAPE_FABRIC_KNOT_RTOL * sscale)
             drape_yread_warn(r, list->items[i], pp,
                              "the slope of the %s jumps at the knot %.9g %s: "
                              "%.9g before, %.9g after (%.2g%% of the largest "
@@ -389,7 +419,7 @@ static int get_units_block(const drape_yread *r, const drape_ynode *map,
  * twist energy it implies should be convex: checked on a grid of twist
  * curvatures up to twice the last knot (or 100 1/m). */
 static int check_bias(const drape_yread *r, const drape_ynode *b,
-                      const drape_fabric *f)
+                      const drape_fabric *f, double *twist_worst, double *twist_at)
 {
     double Bb = drape_fit_slope(&f->bend_bias, 0.0);
     double Bs = 0.25 * (drape_fit_slope(&f->bend[DRAPE_WARP], 0.0) +
@@ -414,15 +444,52 @@ static int check_bias(const drape_yread *r, const drape_ynode *b,
         drape_fabric_twist_energy(f, t, NULL, &d2);
         if (d2 < worst) { worst = d2; at = t; }
     }
-    if (worst < -1e-9 * scale)
-        drape_yread_warn(
-            r, b, "bending.bias",
-            "the twist energy implied by the bias, warp and weft curves is not "
-            "convex: its stiffness Wt'' = 4 M_bias'(2 tau) - M_warp'(tau) - "
-            "M_weft'(tau) reaches %.3g N.m at tau = %.3g 1/m (negative: the "
-            "bias curve softens faster than the warp and weft curves)",
-            worst, at);
+    *twist_worst = worst < -1e-9 * scale ? worst : 0.0;
+    *twist_at = at;
     return 0;
+}
+
+/* The bending curves' warnings: their slope jumps (kj) on one line, at
+ * the piece where there is one jump, else at the `bending` block (bn)
+ * with the largest named; and, on a line of its own at bending.bias (a
+ * run without the bias term leaves it out), a twist energy that is not
+ * convex (worst < 0 at tau = at). */
+static void warn_bending(const drape_yread *r, const drape_ynode *bn, const drape_ynode *b,
+                         const knot_jumps *kj, double worst, double at)
+{
+    static const char *const names[3] = {"warp", "weft", "bias"};
+    char curves[32] = "";
+    for (int k = 0, m = 0; k < 3; k++)
+        if (kj->curves & (1 << k)) {
+            size_t l = strlen(curves);
+            snprintf(curves + l, sizeof curves - l, "%s%s", m++ ? ", " : "", names[k]);
+        }
+    if (kj->n == 1)
+        drape_yread_warn(r, kj->node, kj->path,
+                         "the slope of the bending moment jumps at the knot %.9g %s: "
+                         "%.9g before, %.9g after (%.2g%% of the largest slope at a "
+                         "knot); the fit is not C1 there",
+                         kj->x, kj->xname, kj->sl, kj->sr, kj->pct);
+    else if (kj->n > 1) {
+        const char *piece = strrchr(kj->path, '.');
+        drape_yread_warn(r, bn, "bending",
+                         "the slope of the bending moment jumps at %d knots of %s, by up "
+                         "to %.2g%% of a curve's largest slope at a knot (%s, at %.9g %s: "
+                         "%.9g before, %.9g after): the fits are C0, not C1, as a "
+                         "stiffness interpolated linearly between measured points makes "
+                         "them (drape import arcsim); the moment and the energy stay "
+                         "continuous, only the tangent stiffness jumps",
+                         kj->n, curves, kj->pct, piece ? piece + 1 : kj->path, kj->x,
+                         kj->xname, kj->sl, kj->sr);
+    }
+    if (worst < 0.0)
+        drape_yread_warn(r, b, "bending.bias",
+                         "the twist energy implied by the bias, warp and weft curves is not "
+                         "convex: its stiffness Wt'' = 4 M_bias'(2 tau) - M_warp'(tau) - "
+                         "M_weft'(tau) reaches %.3g N.m at tau = %.3g 1/m (negative: the "
+                         "bias curve softens faster than the warp and weft curves; where "
+                         "the folds reach that twist a rest state can be a saddle, which "
+                         "the static solver reports)", worst, at);
 }
 
 /* A fit list for the example in "missing required key" messages. */
@@ -438,23 +505,27 @@ static int get_bending(const drape_yread *r, const drape_ynode *bn,
         drape_ynode_check_keys(r->doc, bn, "bending", keys, r->err) ||
         get_units_block(r, bn, "bending", 1, &u))
         return -1;
+    knot_jumps kj;
+    memset(&kj, 0, sizeof kj);
     const drape_ynode *w =
         drape_yread_need(r, bn, "bending", "warp", "warp: " FIT_EXAMPLE);
     if (!w || get_fit(r, w, "bending.warp", &u, "bending moment",
-                      &f->bend[DRAPE_WARP]))
+                      &f->bend[DRAPE_WARP], &kj, 0))
         return -1;
     const drape_ynode *t =
         drape_yread_need(r, bn, "bending", "weft", "weft: " FIT_EXAMPLE);
     if (!t || get_fit(r, t, "bending.weft", &u, "bending moment",
-                      &f->bend[DRAPE_WEFT]))
+                      &f->bend[DRAPE_WEFT], &kj, 1))
         return -1;
     const drape_ynode *b = drape_ynode_get(bn, "bias", NULL);
+    double worst = 0.0, at = 0.0;
     if (b) {
-        if (get_fit(r, b, "bending.bias", &u, "bending moment", &f->bend_bias))
+        if (get_fit(r, b, "bending.bias", &u, "bending moment", &f->bend_bias, &kj, 2))
             return -1;
         f->has_bias = 1;
-        return check_bias(r, b, f);
+        if (check_bias(r, b, f, &worst, &at) != 0) return -1;
     }
+    warn_bending(r, bn, b, &kj, worst, at);
     return 0;
 }
 
@@ -478,7 +549,7 @@ static int get_shear(const drape_yread *r, const drape_ynode *sn,
                                      "directions) or `warp` and `weft`, not "
                                      "both");
         if (get_fit(r, curve, "shear.curve", &u, "shear force",
-                    &f->shear[DRAPE_WARP]))
+                    &f->shear[DRAPE_WARP], NULL, 0))
             return -1;
         f->shear[DRAPE_WEFT] = f->shear[DRAPE_WARP];
         return 0;
@@ -486,12 +557,12 @@ static int get_shear(const drape_yread *r, const drape_ynode *sn,
     const drape_ynode *w =
         drape_yread_need(r, sn, "shear", "warp", "warp: " FIT_EXAMPLE);
     if (!w || get_fit(r, w, "shear.warp", &u, "shear force",
-                      &f->shear[DRAPE_WARP]))
+                      &f->shear[DRAPE_WARP], NULL, 0))
         return -1;
     const drape_ynode *t =
         drape_yread_need(r, sn, "shear", "weft", "weft: " FIT_EXAMPLE);
     if (!t || get_fit(r, t, "shear.weft", &u, "shear force",
-                      &f->shear[DRAPE_WEFT]))
+                      &f->shear[DRAPE_WEFT], NULL, 0))
         return -1;
     return 0;
 }

@@ -258,6 +258,35 @@ START_TEST(test_slope_jump_warning)
 }
 END_TEST
 
+/* Slope jumps at several knots of the bending curves are one warning at
+ * the `bending` block (a tabulated curve has one at every knot), with
+ * their number, the curves and the largest jump by hand: warp slopes
+ * 1 -> 0.5 at K = 1 and 0.5 -> 0.2 at K = 2 (50 % and 30 % of its largest
+ * slope at a knot, 1), weft 1 -> 0.1 at K = 1 (90 %). */
+START_TEST(test_slope_jumps_one_line)
+{
+    drape_fabric f;
+    drape_error err;
+    warnings ws = {0};
+    int rc = load_text(HEAD BEND "    - {from: 0, to: 1, poly: [0, 1]}\n"
+                       "    - {from: 1, to: 2, poly: [0.5, 0.5]}\n"
+                       "    - {from: 2, poly: [1.1, 0.2]}\n"
+                       "  weft:\n    - {from: 0, to: 1, poly: [0, 1]}\n"
+                       "    - {from: 1, poly: [0.9, 0.1]}\n" SHEAR,
+                       &f, &err, &ws);
+    ck_assert_msg(rc == 0, "%s", err.msg);
+    ck_assert_int_eq(ws.n, 1);
+    ck_assert_str_eq(ws.first.key, "bending");
+    ck_assert_int_eq(ws.first.line, 5);
+    ck_assert_msg(strstr(ws.first.msg, "jumps at 3 knots of warp, weft, by up to 90% of a "
+                                       "curve's largest slope at a knot (weft[1], at 1 1/m: "
+                                       "1 before, 0.1 after)") != NULL,
+                  "%s", ws.first.msg);
+    /* the curves are what the file says, jumps and all */
+    ck_assert_close_rel(drape_fit_value(&f.bend[DRAPE_WARP], 3.0), 1.7, 1e-14);
+}
+END_TEST
+
 START_TEST(test_value_jump_tolerance)
 {
     drape_fabric f;
@@ -885,6 +914,7 @@ Suite *fabric_suite(void)
     tcase_add_test(tc, test_shear_per_direction_and_units);
     tcase_add_test(tc, test_last_piece_with_to);
     tcase_add_test(tc, test_slope_jump_warning);
+    tcase_add_test(tc, test_slope_jumps_one_line);
     tcase_add_test(tc, test_value_jump_tolerance);
     tcase_add_test(tc, test_kes_construction);
     tcase_add_test(tc, test_kes_reproduces_breen);
