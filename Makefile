@@ -12,16 +12,19 @@
 #   make bench     work-precision report -> docs/performance/ (drape bench;
 #                  installs gnuplot-nox when missing; docs/performance.md)
 #   make bench-ensemble  the drape test, accurate against fast ensembles
-#                  (issue 15) -> docs/performance.md (1-2 h of CPU)
+#                  -> docs/performance.md (1-2 h of CPU)
 #   make bench-convergence  the drape test against the lattice spacing on
 #                  three fabrics -> docs/convergence.md (hours of CPU,
 #                  resumable)
+#   make bench-anisotropy  the lattice's preference for diagonal folds:
+#                  in the bending energy of a smooth skirt, and in a rest
+#                  state turned by 45 degrees (docs/convergence.md; minutes)
 #   make check-hard  the hard-case suite tests/hard/ (docs/stability.md)
 #   make check-default  the default Cusick scene, dynamic at 1 cm, must reach
 #                  equilibrium (~150 s CPU; in CI)
 #   make check-install  a staged install used from elsewhere, its man page,
 #                  uninstall (in CI)
-#   make bench-animate  the animate method against backward Euler (issue 16)
+#   make bench-animate  the animate method against backward Euler
 #   make validate  validation against analytic and reference solutions
 #   make asan      ASan+UBSan build in build/asan, all suites + a small run
 #   make valgrind  memcheck: drape check/run and the loader suites
@@ -86,7 +89,7 @@ TEST_HELPERS = tests/testutil.c tests/elastica.c tests/fixture.c
 TEST_OBJ = $(TEST_SRC:%.c=$(O)/%.o) $(O)/tests/runner.o $(TEST_HELPERS:%.c=$(O)/%.o)
 HEADERS  = $(wildcard include/drape/*.h src/*.h)
 
-.PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick \
+.PHONY: all deps run check unit validate check-slurm check-hard check-default bench bench-quick bench-anisotropy \
         bench-ensemble bench-convergence bench-animate check-install \
         asan valgrind fuzz install uninstall clean FORCE
 
@@ -174,6 +177,23 @@ bench-ensemble: drape
 # of CPU: resumable, see scripts/bench-convergence.sh).
 bench-convergence: drape
 	scripts/bench-convergence.sh
+
+# The lattice's preference for folds on its diagonals, in the bending
+# energy of a smooth skirt of the isotropic study fabric
+# (scripts/lattice-anisotropy.c, docs/convergence.md)
+$(O)/lattice-anisotropy: scripts/lattice-anisotropy.c $(O)/libdrape.a
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $< $(O)/libdrape.a $(DRAPE_LIBS)
+
+# One fold state put on the lattice turned by 10 and 45 degrees, relaxed
+# (scripts/lattice-turn.c, docs/convergence.md): minutes of CPU
+$(O)/lattice-turn: scripts/lattice-turn.c $(O)/libdrape.a
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $< $(O)/libdrape.a $(DRAPE_LIBS)
+
+bench-anisotropy: $(O)/lattice-anisotropy $(O)/lattice-turn
+	$(O)/lattice-anisotropy scenes/cusick.yaml docs/performance/convergence/isotropic-plate.yaml \
+	    0.01 0.007 0.005 0.0035 0.0025 0.00125
+	OPENBLAS_NUM_THREADS=1 $(O)/lattice-turn scenes/cusick.yaml \
+	    docs/performance/convergence/isotropic-plate.yaml 2 0.005 0.01 0.007 0.005
 
 # The animate method against backward Euler, and where its time goes
 # (issue 16; docs/animate.md).

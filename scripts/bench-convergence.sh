@@ -21,7 +21,8 @@
 # WORK/cusickTAG.yaml, scenes/cusick.yaml without its `output` line.
 #
 # Environment:
-#   BENCH_FABRICS   fabric names in fabrics/ (cotton-breen
+#   BENCH_FABRICS   fabric names in fabrics/ or, for the study fabrics
+#                   (isotropic-soft, isotropic-plate), in OUT (cotton-breen
 #                   ponte-roma-knit-wang cotton-poly-wang: the default
 #                   cotton, a limp knit, a stiff woven)
 #   BENCH_SPACINGS  (1cm 0.7cm 0.5cm 0.35cm 0.25cm)
@@ -120,17 +121,22 @@ compare() {
     "$DRAPE" compare "$1" "$2" > "$3.tmp" 2>/dev/null && mv "$3.tmp" "$3" || rm -f "$3.tmp"
 }
 
+# fabric_file F: the library's fabric F, or the study fabric F kept in OUT
+fabric_file() {
+    if [ -f "fabrics/$1.yaml" ]; then echo "fabrics/$1.yaml"; else echo "$OUT/$1.yaml"; fi
+}
+
 if [ "${BENCH_TABLES_ONLY:-0}" != 1 ]; then
     for f in $FABRICS; do
         for h in $SPACINGS; do
             for m in $METHODS; do
                 case $m in
-                fall) run "$f-$h-fall$TAG" "$SCENE" --fabric "fabrics/$f.yaml" \
+                fall) run "$f-$h-fall$TAG" "$SCENE" --fabric "$(fabric_file "$f")" \
                     --spacing "$h" --specimens "$N_FALL" --seed 1 $EXTRA ;;
                 accurate)
                     n=$N_ACC
                     for g in $FINE_ACC; do [ "$g" = "$h" ] && n=$N_ACC_FINE; done
-                    run "$f-$h-accurate$TAG" "$SCENE" --fabric "fabrics/$f.yaml" \
+                    run "$f-$h-accurate$TAG" "$SCENE" --fabric "$(fabric_file "$f")" \
                         --spacing "$h" --specimens "$n" --seed 1 --method dynamic \
                         --integrator auto $EXTRA ;;
                 *) echo "bench-convergence: unknown method $m" >&2; exit 2 ;;
@@ -146,11 +152,12 @@ for f in $FABRICS; do
         compare "$OUT/$f-1cm-$m$TAG.json" "$OUT/$f-0.5cm-$m$TAG.json" "$OUT/$f-1cm-0.5cm-$m$TAG-compare.json"
         compare "$OUT/$f-0.7cm-$m$TAG.json" "$OUT/$f-0.35cm-$m$TAG.json" "$OUT/$f-0.7cm-0.35cm-$m$TAG-compare.json"
         compare "$OUT/$f-0.5cm-$m$TAG.json" "$OUT/$f-0.25cm-$m$TAG.json" "$OUT/$f-0.5cm-0.25cm-$m$TAG-compare.json"
+        compare "$OUT/$f-0.35cm-$m$TAG.json" "$OUT/$f-0.175cm-$m$TAG.json" "$OUT/$f-0.35cm-0.175cm-$m$TAG-compare.json"
     done
-    for h in 1cm 0.7cm 0.5cm 0.35cm 0.25cm; do
+    for h in 1cm 0.7cm 0.5cm 0.35cm 0.25cm 0.175cm; do
         compare "$OUT/$f-$h-accurate$TAG.json" "$OUT/$f-$h-fall$TAG.json" "$OUT/$f-$h-fall-accurate$TAG-compare.json"
     done
 done
 
-python3 scripts/convergence-tables.py "$OUT" "$TAG" docs/convergence.md "$FABRICS"
+python3 scripts/convergence-tables.py "$OUT" "$TAG" docs/convergence.md "$FABRICS" "$WORK"
 echo "bench-convergence: tables in docs/convergence.md (results in $OUT)" >&2
