@@ -734,7 +734,7 @@ static void *sun_alloc(sun_kind kind, const char *name, drape_ode *ode,
          * (z_i - a_i) / gamma, instead of one more evaluation: 27-31 % fewer
          * right-hand sides, same error on the hang test scene.  Not for
          * arkode-imex, whose error grew 20x with it (docs/integrators.md,
-         * "Linear solvers"). */
+         * "Options and defaults"). */
         if (kind == SK_DIRK) TRY(ARKStepSetDeduceImplicitRhs(s->mem, SUNTRUE));
         /* arkode-imex evaluates f_I again at each solved stage, so the
          * Newton error of the stage (allowed up to 0.1 of the error test by
