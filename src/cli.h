@@ -17,6 +17,21 @@ void drape_cli_set_error_context(const char *ctx);
 /* Warning callback for loaders: "drape: FILE:LINE:COL: key: warning: ...". */
 void drape_cli_warn(void *ctx, const drape_error *w);
 
+struct option; /* <getopt.h> */
+/* Before getopt_long(argc, argv, shortopts, opts, ...): a long option
+ * abbreviated to a prefix of more than one of opts (`--fall-t`: fall-time,
+ * fall-tol) is a bad command line.  getopt_long itself takes the first
+ * match where the candidates share their has_arg, flag and val, as the
+ * options that set a run's value do.  Prints "CMD: option `--fall-t' is
+ * ambiguous; possibilities: --fall-time, --fall-tol" and "Try `CMD
+ * --help'." (cmd: "drape run") and returns the exit status of a bad
+ * command line; 0 when every option is an exact name, a unique prefix, or
+ * unknown (getopt_long says so).  Option values are skipped as getopt_long
+ * takes them (`--terms --x`: --x is the value); scanning stops at `--`,
+ * and with a leading '+' in shortopts at the first non-option. */
+int drape_cli_args_unambiguous(int argc, char *const argv[], const char *shortopts,
+                               const struct option *opts, const char *cmd);
+
 /* The keys of `drape run`'s result, in output order, as CSV column names
  * (JSON nests energy_J_*: energy_J {kinetic, ...}); NULL-terminated.  The
  * contract of issue 3 plus additions; batch uses it for results.csv. */

@@ -482,6 +482,7 @@ int drape_cli_batch(int argc, char **argv)
     int resume = 0, quiet = 0, c, li;
     run_args ra; /* the passed-on options' values: the scene is checked with --spacing */
     memset(&ra, 0, sizeof ra);
+    if ((c = drape_cli_args_unambiguous(argc, argv, "j:qh", opts, "drape batch")) != 0) return c;
     while ((c = getopt_long(argc, argv, "j:qh", opts, &li)) != -1) {
         switch (c) {
         case 'j': {

@@ -529,6 +529,7 @@ int drape_cli_bench(int argc, char **argv)
     int max_order = 0;
     int linsol = 0, quiet = 0, kernels = 0, c;
     char *end;
+    if ((c = drape_cli_args_unambiguous(argc, argv, "qh", opts, "drape bench")) != 0) return c;
     while ((c = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;

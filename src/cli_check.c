@@ -194,6 +194,7 @@ int drape_cli_check(int argc, char **argv)
     static const struct option opts[] = {{"help", no_argument, NULL, 'h'},
                                          {NULL, 0, NULL, 0}};
     int c;
+    if ((c = drape_cli_args_unambiguous(argc, argv, "h", opts, "drape check")) != 0) return c;
     while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         if (c == 'h') { fputs(check_usage, stdout); return 0; }
         fputs("Try `drape check --help'.\n", stderr); /* getopt named the option */

@@ -885,6 +885,7 @@ int drape_cli_import(int argc, char **argv)
     im.dir = ".";
     const char *name = NULL;
     int c;
+    if ((c = drape_cli_args_unambiguous(argc, argv, "h", opts, "drape import")) != 0) return c;
     while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
         switch (c) {
         case O_OUTDIR:

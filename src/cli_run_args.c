@@ -454,6 +454,7 @@ int drape_cli_run(int argc, char **argv)
     int fmt = -1, quiet = 0, c, li; /* 0 json, 1 csv, 2 text; -1 not given */
     run_args ra;
     drape_cli_run_args_init(&ra);
+    if ((c = drape_cli_args_unambiguous(argc, argv, "qhj:", opts, "drape run")) != 0) return c;
     while ((c = getopt_long(argc, argv, "qhj:", opts, &li)) != -1) {
         switch (c) {
         case O_FABRIC: fabric_path = optarg; break;

@@ -196,6 +196,7 @@ static int dispatch(int argc, char **argv)
     /* global options come before the command: stop at the first non-option */
     int c;
     opterr = 0;
+    if ((c = drape_cli_args_unambiguous(argc, argv, "+hV", opts, "drape")) != 0) return c;
     while ((c = getopt_long(argc, argv, "+hV", opts, NULL)) != -1) {
         switch (c) {
         case 'h': fputs(usage_text, stdout); return 0;

@@ -129,6 +129,49 @@ START_TEST(test_usage_errors)
 }
 END_TEST
 
+/* An abbreviation that begins more than one long option is a bad command
+ * line naming them, in every subcommand: getopt_long alone took the first
+ * match where the options share their getopt value (`--fall-t 0.5` ran
+ * with --fall-tol 0.5 m, `--ma 3` with --max-steps 3).  An exact name, or
+ * a prefix of only one option, still works (the spacing and end time
+ * given as --spac and --t-m are the result's), and a value that looks
+ * like an option is the option's value, not an option. */
+START_TEST(test_ambiguous_options)
+{
+    static const char *const cmd[][3] = {
+        {"run -q ../scenes/hang.yaml --spacing 5cm --t-max 0.05s --fall-t 0.5", "--fall-time",
+         "--fall-tol"},
+        {"run -q ../scenes/hang.yaml --spacing 5cm --t-max 0.05s --fall-t=0.5", "--fall-time",
+         "--fall-tol"},
+        {"run -q ../scenes/hang.yaml --spacing 5cm --t-max 0.05s --ma 3", "--max-steps",
+         "--max-order"},
+        {"batch -q --t 0.2s ../scenes/hang.yaml ../fabrics/denim-wang.yaml", "--t-max", "--terms"},
+        {"bench --re 2", "--repeat", "--ref-rtol"},
+        {"import --f arcsim x.json", NULL, NULL}, /* --force only: not ambiguous */
+    };
+    for (size_t i = 0; i < sizeof cmd / sizeof cmd[0]; i++) {
+        int st = tu_run_drape(cmd[i][0], out, CAP, err, CAP);
+        if (!cmd[i][1]) {
+            ck_assert_msg(!strstr(err, "ambiguous"), "drape %s: %s", cmd[i][0], err);
+            continue;
+        }
+        ck_assert_msg(st == 2, "drape %s: status %d, %s", cmd[i][0], st, err);
+        ck_assert_msg(strstr(err, "ambiguous") && strstr(err, cmd[i][1]) && strstr(err, cmd[i][2]),
+                      "drape %s: %s", cmd[i][0], err);
+        ck_assert_msg(out[0] == 0, "drape %s printed %s", cmd[i][0], out);
+    }
+    ck_assert_int_eq(tu_run_drape("run -q ../scenes/hang.yaml --spac 5cm --t-m 0.05s --format json",
+                                  out, CAP, err, CAP), 0);
+    ck_assert_msg(strstr(out, "\"spacing_m\": 0.05,") && strstr(out, "\"t_end_s\": 0.05,"), "%s",
+                  out);
+    /* --ref is a whole name, and a prefix of --ref-rtol, --ref-max-wall */
+    ck_assert_int_eq(tu_run_drape("bench --ref cvode-bdf,nope", out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "--ref: unknown integrator `nope'"), "%s", err);
+    ck_assert_int_eq(tu_run_drape("run -q --terms --fall-t", out, CAP, err, CAP), 2);
+    ck_assert_msg(strstr(err, "--terms:") && !strstr(err, "ambiguous"), "%s", err);
+}
+END_TEST
+
 /* An empty directory name given to --out, --resume or --out-dir was
  * taken as a path: `drape run --out ''` failed with exit 3 and "cannot
  * create directory" naming no path, and batch's directory maker read past
@@ -363,6 +406,7 @@ Suite *cli_suite(void)
     tcase_add_test(tc, test_check_damping);
     tcase_add_test(tc, test_shared_examples);
     tcase_add_test(tc, test_bad_corpus);
+    tcase_add_test(tc, test_ambiguous_options);
     suite_add_tcase(s, tc);
     return s;
 }
