@@ -373,19 +373,10 @@ START_TEST(test_format_text)
     ck_assert_msg(strstr(out, "status             equilibrium") && strstr(out, "CPU "), "%s", out);
     json_object_put(o);
     /* on a terminal: the summary by default, JSON when asked for */
-    snprintf(cmd, sizeof cmd, "script -qec '%s %s' /dev/null", tu_drape_bin(), args);
-    FILE *p = popen(cmd, "r");
-    ck_assert_ptr_nonnull(p);
-    size_t n = fread(out, 1, CAP - 1, p);
-    out[n] = 0;
-    ck_assert_int_eq(pclose(p), 0);
+    ck_assert_int_eq(tu_run_drape_pty(args, out, CAP), 0);
     ck_assert_msg(strstr(out, "drape coefficient") && !strchr(out, '{'), "%s", out);
-    snprintf(cmd, sizeof cmd, "script -qec '%s %s --format json' /dev/null", tu_drape_bin(), args);
-    p = popen(cmd, "r");
-    ck_assert_ptr_nonnull(p);
-    n = fread(out, 1, CAP - 1, p);
-    out[n] = 0;
-    ck_assert_int_eq(pclose(p), 0);
+    snprintf(cmd, sizeof cmd, "%s --format json", args);
+    ck_assert_int_eq(tu_run_drape_pty(cmd, out, CAP), 0);
     ck_assert_msg(strstr(out, "{ \"fabric\"") && !strstr(out, "drape coefficient"), "%s", out);
     ck_assert_int_eq(tu_run_drape("run --format xml", out, CAP, err, CAP), 2);
     ck_assert_msg(strstr(err, "json, csv or text"), "%s", err);

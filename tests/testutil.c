@@ -81,6 +81,18 @@ void tu_read_file(const char *path, char *buf, size_t cap)
     fclose(f);
 }
 
+int tu_run_drape_pty(const char *args, char *out, size_t outcap)
+{
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "script -qec '%s %s' /dev/null", tu_drape_bin(), args);
+    FILE *p = popen(cmd, "r");
+    if (!p) return -1;
+    size_t n = fread(out, 1, outcap - 1, p);
+    out[n] = 0;
+    int st = pclose(p);
+    return st == -1 || !WIFEXITED(st) ? -1 : WEXITSTATUS(st);
+}
+
 int tu_run_drape(const char *args, char *out, size_t outcap, char *err,
                  size_t errcap)
 {

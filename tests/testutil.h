@@ -51,6 +51,13 @@ const char *tu_drape_bin(void);
 int tu_run_drape(const char *args, char *out, size_t outcap, char *err,
                  size_t errcap);
 
+/* Run drape with the given argument string on a pseudo-terminal (stdout
+ * and stderr a terminal, as a person's shell has them; made by script(1)),
+ * capture what it prints (truncated to cap-1 bytes, NUL-terminated) and
+ * return the exit status of script, which is drape's (-1 if it could not
+ * run). */
+int tu_run_drape_pty(const char *args, char *out, size_t outcap);
+
 /* Processes of drape started without a shell, to signal them while they
  * run.  A test that spawns one ends it with tu_signal_and_reap. */
 
