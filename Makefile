@@ -169,7 +169,7 @@ bench-quick: drape
 bench: drape
 	scripts/bench.sh
 
-# Accurate against fast drape-test ensembles (issue 15; docs/ensemble.md).
+# Accurate against fast drape-test ensembles (docs/ensemble.md).
 bench-ensemble: drape
 	scripts/bench-ensemble.sh
 
@@ -196,11 +196,11 @@ bench-anisotropy: $(O)/lattice-anisotropy $(O)/lattice-turn
 	    docs/performance/convergence/isotropic-plate.yaml 2 0.005 0.01 0.007 0.005
 
 # The animate method against backward Euler, and where its time goes
-# (issue 16; docs/animate.md).
+# (docs/animate.md).
 bench-animate: drape
 	scripts/bench-animate.sh
 
-# The default scene to equilibrium, the way it asks (issue 3).
+# The default scene to equilibrium, the way it asks.
 check-default: drape
 	scripts/check-default.sh
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# make bench-animate (issue 16, item 3): the animate method against
+# make bench-animate: the animate method against
 # backward Euler under error control, in one run on one core, and where
 # animate's time goes.
 #
@@ -174,7 +174,7 @@ b, e = "<!-- animate-bench begin: written by scripts/bench-animate.sh; do not ed
 if b in s and e in s:
     s = s[:s.index(b) + len(b)] + "\n" + text + s[s.index(e):]
 else:
-    s += "\n## Animate: frames at graphics speed (issue 16)\n\n" + b + "\n" + text + e + "\n"
+    s += "\n## Animate: frames at graphics speed\n\n" + b + "\n" + text + e + "\n"
 open(doc + ".tmp", "w").write(s)
 os.replace(doc + ".tmp", doc)
 open(os.path.join(out, "table.md.tmp"), "w").write(text)

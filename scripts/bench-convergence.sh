@@ -1,6 +1,6 @@
 #!/bin/sh
 # make bench-convergence: the drape test against the lattice spacing
-# (MODEL.md 6, "Converged in the spacing"; docs/convergence.md).
+# (docs/model.md 6, "Converged in the spacing"; docs/convergence.md).
 #
 # For each fabric F and spacing h, on the shipped Cusick scene:
 #   fall      drape run scenes/cusick.yaml --fabric F --spacing h
@@ -12,7 +12,7 @@
 # is taken up again (drape run --resume) by the next call, and each
 # result with a .meta (command, commit, date, CPU and wall seconds) in
 # OUT.  Then drape compare: each spacing against the one half as fine
-# (the convergence test of MODEL.md 6: the mean moves by less than 0.01
+# (the convergence test of docs/model.md 6: the mean moves by less than 0.01
 # and the node histograms are not distinguished at 5 %), and the fall
 # against the accurate ensemble at the same spacing; and the tables
 # between the markers "convergence-bench" in docs/convergence.md.

@@ -1,5 +1,5 @@
 #!/bin/sh
-# make bench-ensemble (issue 15, items 2, 3, 4, 5 and 7): the drape test as
+# make bench-ensemble: the drape test as
 # a lab runs it, accurate against fast, measured and written down.
 #
 # For each case (scene, fabric, spacing):
@@ -8,11 +8,11 @@
 #   compare   drape compare ACCURATE FALL: exact test of the node histograms
 #             (p_nodes), Welch's test of the mean DCs, the difference of the
 #             means, and the ratio of CPU seconds per specimen.
-# Item 3 asks of the fall ensemble: (a) p_nodes >= 0.05, (b) |dc_diff| <=
+# The fall ensemble is judged by: (a) p_nodes >= 0.05, (b) |dc_diff| <=
 # 0.01 and inside the accurate 95 % interval, (c) cpu_ratio >= 50.
 # Also: a second accurate setting on the default scene (the scene's own
-# arkode-imex against auto, item 2) and the fall ensemble's mean DC against
-# the lattice spacing (item 5).
+# arkode-imex against auto) and the fall ensemble's mean DC against
+# the lattice spacing.
 #
 # Results: docs/performance/ensemble/CASE-{accurate,fall,compare}.json, each
 # with a .meta file (command, drape commit, date, CPU and wall seconds), and
@@ -23,7 +23,7 @@
 #                 for the spacing study alone)
 #   BENCH_REF_SPECIMENS, BENCH_FAST_SPECIMENS   (16, 128: a fall specimen
 #                 costs about a second, and with 32 its own interval was as
-#                 wide as the reference's; seventeenth session)
+#                 wide as the reference's)
 #   BENCH_JOBS    specimens at a time (2)
 #   BENCH_REUSE_ACCURATE=1  keep an accurate JSON that exists (the slow part:
 #                 about 50 s of CPU per specimen at 1 cm); its .meta says
@@ -37,11 +37,10 @@
 #                 (in every mode the tables are stamped with the commits in
 #                 the fall ensembles' .meta files, whatever this run made)
 #   BENCH_DAMPING_SHEAR  a shear damping for every run (`--damping-shear`,
-#                 e.g. 0.5ms; default none: MODEL.md's dissipation). Its
+#                 e.g. 0ms; default none: the fabric's own, docs/model.md 3.6). Its
 #                 ensembles go to docs/performance/ensemble/damping-shear-VALUE/
 #                 and its tables between the markers "ensemble-bench-damped
-#                 VALUE" in docs/performance.md (docs/ensemble.md, "Shear
-#                 damping as a scene option")
+#                 VALUE" in docs/performance.md
 #   BENCH_CALIBRATE  accurate specimens rerun now for each case (2; 0 = none):
 #                 the first seeds of its reference, at -j BENCH_JOBS like the
 #                 fall.  A reference made on another day was timed on a
@@ -66,13 +65,12 @@ OUT=docs/performance/ensemble
 N_REF=${BENCH_REF_SPECIMENS:-16}
 N_FAST=${BENCH_FAST_SPECIMENS:-128}
 JOBS=${BENCH_JOBS:-2}
-# the library's other five fabrics at 1 cm (twentieth session): the
+# the library's other five fabrics at 1 cm: the
 # shipped scene as `drape batch` runs it (the bias term where the fabric
 # has a bias curve), so that every fabric of fabrics/ is measured; and
 # the three older *-wang cases in that model too (*-bias-1cm)
 LIBRARY_CASES="denim-1cm blanket-1cm interlock-1cm ponte-1cm cotton-kes-1cm cotton-poly-bias-1cm jacket-bias-1cm tablecloth-bias-1cm"
-# the table at 1 cm, the shipped scene (item 4's "1 cm if affordable";
-# twenty-ninth session): its accurate ensemble costs about 2.6 CPU hours
+# the table at 1 cm, the shipped scene: its accurate ensemble costs about 2.6 CPU hours
 # (16 specimens, 592 s each), its 128 fall specimens about 20 CPU minutes
 ALL_CASES="cotton-1cm cotton-poly-1cm jacket-1cm tablecloth-1cm cotton-2cm table-2cm table-1cm $LIBRARY_CASES"
 CASES=${BENCH_CASES:-$ALL_CASES}
@@ -93,9 +91,9 @@ COMMIT=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
 [ -z "$(git status --porcelain -- src include 2>/dev/null)" ] || COMMIT="$COMMIT+changes"
 mkdir -p "$OUT"
 
-# The issue-15 cases are the seed's model: the *-wang fabrics have had
-# bias curves since issue 18, which the shipped Cusick scene uses; their
-# reference ensembles were made without, so both runs leave the term out.
+# The first cases are the seed's model: the *-wang fabrics have bias
+# curves, which the shipped Cusick scene uses; these cases measure the
+# fall without the bias term, so both runs leave it out.
 SEED_TERMS="--terms stretch,bend,shear,gravity"
 case_args() { # (an unknown case stops the bench: exit 2 in the $() alone would not)
     m=$(case_args_model "$1") || exit 2
@@ -198,7 +196,7 @@ for c in $CASES; do
         compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" "$OUT/$c-imex-compare.json"
     fi
 done
-# item 2: a second accurate setting, the scene's own integrator (arkode-imex)
+# a second accurate setting, the scene's own integrator (arkode-imex)
 case " $CASES " in
 *" cotton-1cm "*)
     if [ "$REUSE" = 1 ] && [ -s "$OUT/cotton-1cm-imex.json" ]; then
@@ -220,7 +218,7 @@ for c in $ALL_CASES; do
         compare "$OUT/$c-accurate.json" "$OUT/$c-imex.json" "$OUT/$c-imex-compare.json"
     fi
 done
-# item 5: the fall ensemble against the spacing
+# the fall ensemble against the spacing
 for h in $SPACINGS_RUN; do
     # shellcheck disable=SC2046
     run "spacing-$h-fall" $(case_args "spacing-$h") --specimens "$N_SPACING" -j "$JOBS"
@@ -399,11 +397,10 @@ text = ["<!-- %s begin: written by scripts/bench-ensemble.sh; do not edit -->" %
         "least 50 times less CPU per specimen, judged on the ratio measured in one run where "
         "there is one (the accurate specimens of the first seeds timed again with the fall)." % (
             " BENCH_DAMPING_SHEAR=" + damp if damp else "", commit,
-            ("Every run with `--damping-shear %s`, a shear damping that MODEL.md does not have "
-             "(docs/ensemble.md, \"Shear damping as a scene option\"). " % damp) if damp else "",
-            n_ref, n_fast), ""] + lines + ["", "Second accurate setting, default scene (item 2):", ""] + second + \
-       ["", "The same fall ensembles against the scene's own integrator, arkode-imex at rtol 1e-4 (`--method dynamic`, the accurate run of issue 15's first table), where its 16-specimen ensemble exists; its agreement with auto is the second accurate setting of those fabrics:", ""] + own + \
-       (["", "The fall method's ensemble against the lattice spacing, default scene (item 5):", ""] + sp + ["", fit] if len(sp) > 2 else []) + ["", "Provenance:", ""] + prov + ["", "<!-- %s end -->" % mark]
+            ("Every run with `--damping-shear %s` in place of the fabric's own shear damping. " % damp) if damp else "",
+            n_ref, n_fast), ""] + lines + ["", "Second accurate setting, default scene:", ""] + second + \
+       ["", "The same fall ensembles against the scene's own integrator, arkode-imex at rtol 1e-4 (`--method dynamic`), where its 16-specimen ensemble exists; its agreement with auto is the second accurate setting of those fabrics:", ""] + own + \
+       (["", "The fall method's ensemble against the lattice spacing, default scene:", ""] + sp + ["", fit] if len(sp) > 2 else []) + ["", "Provenance:", ""] + prov + ["", "<!-- %s end -->" % mark]
 open(os.path.join(out, "table.md"), "w").write("\n".join(text) + "\n")
 p = "docs/performance.md"
 doc = open(p).read()
@@ -412,9 +409,9 @@ begin, end = "<!-- %s begin" % mark, "<!-- %s end -->" % mark
 if begin in doc:
     doc = re.sub(re.escape(begin) + r".*?" + re.escape(end), lambda m: block, doc, flags=re.S)
 elif damp:
-    doc = doc.rstrip("\n") + ("\n\n## The drape test with shear damping %s (not MODEL.md's model)\n\n" % damp) + block + "\n"
+    doc = doc.rstrip("\n") + ("\n\n## The drape test with shear damping %s (not the model's (docs/model.md) model)\n\n" % damp) + block + "\n"
 else:
-    doc = doc.rstrip("\n") + "\n\n## The drape test: accurate against fast ensembles (issue 15)\n\n" + block + "\n"
+    doc = doc.rstrip("\n") + "\n\n## The drape test: accurate against fast ensembles\n\n" + block + "\n"
 open(p + ".tmp", "w").write(doc)
 os.replace(p + ".tmp", p)
 print("\n".join(lines))

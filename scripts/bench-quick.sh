@@ -1,7 +1,7 @@
 #!/bin/sh
 # bench-quick.sh: wall time, steps and drape coefficient of the default
-# Cusick and hang scenes for every integrator on this machine (issue 3,
-# "Record").  Writes docs/bench-quick.csv and the table between the
+# Cusick and hang scenes for every integrator on this machine.
+# Writes docs/bench-quick.csv and the table between the
 # GENERATED markers of docs/integrators.md.  Never run by the tests.
 #
 #   scripts/bench-quick.sh                    (or `make bench-quick`)

@@ -1,12 +1,12 @@
 #!/bin/sh
-# make check-default (issues 3 and 15): the default scene the way a user
+# make check-default : the default scene the way a user
 # meets it, and the way it once was run.
 #  1. `drape run` with no arguments: the default Cusick test, 12 specimens
 #     with the fall method (a few seconds); every specimen must reach a
 #     certified equilibrium and the 95 % half-width of the mean DC must
 #     stay below 0.02 (docs/ensemble.md measures about 0.009).
 #  2. One specimen in time with the scene's integrator (arkode-imex, 1 cm):
-#     status `equilibrium` (about 100 s of CPU; issue 3).
+#     status `equilibrium` (about 100 s of CPU).
 # Kept out of `make check` for its time; CI runs it.
 set -eu
 cd "$(dirname "$0")/.."

@@ -32,7 +32,7 @@
 #
 # Environment: DRAPE_BIN (default ./drape), CHECK_HARD_TIMEOUT (seconds per
 # run, default 300), CHECK_HARD_INTEGRATORS (default `auto animate`: the
-# scenes' own and the fixed-step animate method of issue 16; e.g. "auto
+# scenes' own and the fixed-step animate method; e.g. "auto
 # arkode-imex" runs every case with each, and the table gets one row per
 # integrator), CHECK_HARD_UPDATE_DOC=1 (same as --update-doc, which
 # rewrites the table between the GENERATED markers of docs/stability.md).

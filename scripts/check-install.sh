@@ -1,5 +1,5 @@
 #!/bin/sh
-# make check-install (issue 17; docs/install.md): install drape into a
+# make check-install (docs/install.md): install drape into a
 # temporary DESTDIR, use the staged binary from another directory as a user
 # would after `make install` (DRAPE_DATA points it at the staged data, as
 # the compiled-in /usr/local/share/drape is not there yet), render its

@@ -263,7 +263,7 @@ def main():
         if not any_row:
             lines.append("| (no results yet) | | | | | | | | | |")
         lines.append("")
-        lines.append("Halving the spacing (MODEL.md 6: the mean moves by less than 0.01 and "
+        lines.append("Halving the spacing (docs/model.md 6: the mean moves by less than 0.01 and "
                      "the node histograms are not distinguished at 5 %):")
         lines.append("")
         lines.append("| method | spacing -> half | mean change +- 95 % | p_nodes | converged |")

@@ -1,6 +1,6 @@
 #!/bin/sh
 # The manual page drape.1, generated from the program's own help so that
-# the two cannot drift (issue 17; docs/install.md):
+# the two cannot drift (docs/install.md):
 #   - help2man turns `drape --help` and `drape --version` into NAME,
 #     SYNOPSIS, DESCRIPTION (the commands), OPTIONS and EXIT STATUS;
 #   - a section per command holds `drape COMMAND --help` verbatim, and the

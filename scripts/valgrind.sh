@@ -3,8 +3,7 @@
 # input file, on one small `drape run` with frames, one with the shadow
 # picture (SVG and PNG), and on the test suites
 # of the loaders, the lattice and the allocation-failure walks
-# (tests/check_alloc.c), which is where "no leak" of issue 7, item 4, is
-# checked.  Any memcheck error or definite/indirect/possible leak fails.
+# (tests/check_alloc.c), which is where "no leak" is checked.  Any memcheck error or definite/indirect/possible leak fails.
 # docs/reliability.md explains the choices.
 #
 #   scripts/valgrind.sh          (make valgrind) uses ./drape and

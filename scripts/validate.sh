@@ -1,11 +1,11 @@
 #!/bin/sh
-# validate.sh: regenerate the tables of docs/validation.md (issue 5).
+# validate.sh: regenerate the tables of docs/validation.md .
 #
 # Builds the validation suite (tests/check_validation.c with the reference
 # solvers of tests/elastica.c) and a drape binary out of tree in $O
 # (default build/validate), runs the suite's "full" case, which sweeps the
 # cantilever, catenary, Kawabata, hanging-chain, energy and Cusick checks
-# and asserts the issue's bounds, and replaces the text between the
+# and asserts the validation bounds, and replaces the text between the
 # GENERATED markers of docs/validation.md with the new tables.  About 11
 # minutes of CPU (the 10 s energy runs of `drape run` take most of it).
 # The dynamic Cusick runs have their own script (minutes each):

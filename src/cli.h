@@ -34,7 +34,7 @@ int drape_cli_args_unambiguous(int argc, char *const argv[], const char *shortop
 
 /* The keys of `drape run`'s result, in output order, as CSV column names
  * (JSON nests energy_J_*: energy_J {kinetic, ...}); NULL-terminated.  The
- * contract of issue 3 plus additions; batch uses it for results.csv. */
+ * contract (keys are added, never renamed); batch uses it for results.csv. */
 extern const char *const drape_cli_run_keys[];
 int drape_cli_run_nkeys(void);
 

@@ -21,7 +21,7 @@
 #define BATCH_NAME_MAX 100
 
 /* The keys of `drape run --format csv`, in its order (cli_run.c; the
- * contract of issue 3), are the columns between fabric_file and error.  A
+ * contract: added to, never renamed), are the columns between fabric_file and error.  A
  * child's row is mapped onto these by name; tests/check_batch.c checks
  * that the list matches the run's header. */
 #define run_keys drape_cli_run_keys

@@ -110,8 +110,8 @@ const char *drape_cli_batch_old_name(const batch *b, const char *fabric_file)
 /* DIR/inputs.sum: "SUM:NAME<TAB>fabric_file" for every row, so that
  * --resume can tell a fabric file edited since its row was made, and can
  * give the fabric the NAME (logs/NAME.*, frames/NAME/) its row was made
- * under.  (Before the thirtieth session "SUM<TAB>fabric_file": still read;
- * an older drape reads the new lines' SUM and stops at the colon.) */
+ * under.  Lines of the form "SUM<TAB>fabric_file" (no NAME) are read too;
+ * a reader that stops at the colon still gets the SUM. */
 static int write_sums(const batch *b, drape_error *err)
 {
     char path[BATCH_PATH_MAX + 16];

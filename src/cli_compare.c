@@ -19,8 +19,8 @@
  *                differs (a warning on stderr names each difference);
  *                null when none differs but a file lacks one
  *
- * and the inputs' n, dc, dc_ci95, nodes_hist and those five keys.  Issue 15 item 3 judges a
- * fast method against the accurate one by exactly these numbers
+ * and the inputs' n, dc, dc_ci95, nodes_hist and those five keys.  A fast
+ * method is judged against the accurate one by exactly these numbers
  * (docs/ensemble.md).  Exit status 0, or 1/3 for unreadable input; a
  * number outside the normal doubles anywhere in a file is refused at its
  * line and key (drape_cli_read_json_in_range, as `drape import` reads).

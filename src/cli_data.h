@@ -1,6 +1,5 @@
 /* cli_data.h: where the command line finds drape's shipped data, the
- * default scene and the shipped fabrics and scenes (issue 17,
- * docs/install.md).  Private to src/main.c and src/cli_*.c.
+ * default scene and the shipped fabrics and scenes (docs/install.md).  Private to src/main.c and src/cli_*.c.
  *
  * A relative path that names no file in the current directory is looked
  * up, in order, in

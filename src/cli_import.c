@@ -540,7 +540,7 @@ static void arcsim_write(FILE *f, const char *name, const char *path, const arcs
     arcsim_write_fit(f, m->bend[0]);
     fputs("  weft:   # bending[2]: hinges along v, weft yarns bent; factor 1/4 assumed\n", f);
     arcsim_write_fit(f, m->bend[2]);
-    /* the model's bias term (issue 18) needs B_bias >= (B_warp + B_weft) / 4 */
+    /* the model's bias term needs B_bias >= (B_warp + B_weft) / 4 */
     if (m->bend[1][0] >= 0.25 * (m->bend[0][0] + m->bend[2][0])) {
         fputs("  bias:   # bending[1]: hinges at 45 degrees, a strip cut on the bias; factor "
               "1/4 assumed\n", f);

@@ -1,5 +1,5 @@
 /* cli_resume.c: --resume's reading of DIR/drape.h5 and the /run group
- * that makes it possible (cli_resume.h; issue 7, docs/reliability.md). */
+ * that makes it possible (cli_resume.h; docs/reliability.md). */
 #include "cli_resume.h"
 
 #include <math.h>
@@ -91,9 +91,9 @@ int drape_cli_resume_load(const char *dir, resume_info *ri, drape_error *err)
     ri->t_max = ck_num(c, "t_max_s");
     ri->strain_limit = ck_num(c, "strain_limit");
     ri->below_since = ck_num(c, "eq_below_since_s");
-    ri->fixed_step = ck_num(c, "step_s"); /* added (issue 16) */
-    ri->terms = ck_num(c, "terms");       /* added (issue 18) */
-    ri->damping_shear = ck_num(c, "damping_shear_s"); /* added (thirteenth session) */
+    ri->fixed_step = ck_num(c, "step_s");
+    ri->terms = ck_num(c, "terms");
+    ri->damping_shear = ck_num(c, "damping_shear_s");
     ri->seed = ck_num(c, "seed"); /* added: NaN (unknown) in older files */
     double ms = ck_num(c, "max_steps"), fr = ck_num(c, "frames"), h5 = ck_num(c, "hdf5");
     ri->ref.valid = ck_num(c, "energy_ref_valid") == 1.0;
@@ -185,8 +185,8 @@ void drape_cli_run_kv_fill(run_kv *k, const char *scene_path, const drape_scene 
     kv_num(k, "energy_ref_shear_J", res->diag_ref.E.shear);
     kv_num(k, "energy_ref_gravity_J", res->diag_ref.E.gravity);
     kv_num(k, "signal", signal);
-    kv_num(k, "step_s", so->fixed_step); /* animate's step (issue 16) */
-    kv_num(k, "terms", (double)s->terms); /* the terms run, --terms included (issue 18) */
+    kv_num(k, "step_s", so->fixed_step); /* animate's step */
+    kv_num(k, "terms", (double)s->terms); /* the terms run, --terms included */
     kv_num(k, "damping_shear_s", s->damping_shear); /* --damping-shear included */
     kv_num(k, "seed", seed); /* the perturbation seed, --seed included; NaN unknown */
 }

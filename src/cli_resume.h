@@ -1,6 +1,6 @@
 /* cli_resume.h: what `drape run --resume DIR` reads back from DIR/drape.h5
  * (the /run group written when a run is interrupted), and the /run group
- * itself (issue 7; docs/reliability.md).  Private to src/cli_*.c. */
+ * itself (docs/reliability.md).  Private to src/cli_*.c. */
 #ifndef DRAPE_CLI_RESUME_H
 #define DRAPE_CLI_RESUME_H
 

@@ -1,12 +1,12 @@
 /* diagnose.c: numerical faults of a state (diagnose.h; docs/reliability.md).
  *
  * Strain of a stretch edge (a, b) at positions x (the definition of
- * drape_model_max_strain, MODEL.md 3.1):
+ * drape_model_max_strain, docs/model.md 3.1):
  *     eps = | |x_b - x_a| - sigma | / sigma                               (1)
- * Total energy (MODEL.md 3, 4):
+ * Total energy (docs/model.md 3, 4):
  *     E = 1/2 sum m_i |v_i|^2 + E_stretch + E_bend + E_shear + E_gravity  (2)
  * With fixed particles at rest and only dissipative non-conservative
- * forces (air drag -c m v, edge dashpots, MODEL.md 3.6), dE/dt <= 0, so
+ * forces (air drag -c m v, edge dashpots, docs/model.md 3.6), dE/dt <= 0, so
  *     E(t) - E(0) > gain x scale                                          (3)
  * can only be a numerical blow-up; scale = M g L + sum |E_k(0)|.
  */

@@ -1,6 +1,6 @@
-/* drape.c: observers of a lattice state (MODEL.md section 6).
+/* drape.c: observers of a lattice state (docs/model.md section 6).
  *
- * Drape coefficient (Cusick; MODEL 6):
+ * Drape coefficient (Cusick; docs/model.md 6):
  *   DC = (A_shadow - A_disk) / (A_specimen - A_disk)                    (1)
  * A_shadow is the area of the union of the horizontal projections of the
  * mesh faces.  A face is a lattice quad a-b-c-d; its projection is taken as
@@ -33,7 +33,7 @@
  * from 2 cm (n <= 4), 1 cm (n <= 10) and 0.7 cm (n <= 12) to 0.25 cm
  * (tests/check_drape.c).
  *
- * Cantilever (Peirce 1930; ASTM D1388; MODEL 6):
+ * Cantilever (Peirce 1930; ASTM D1388; docs/model.md 6):
  *   theta = atan2(-z_tip, x_tip)   (chord from the platform edge x = z = 0)
  *   c = l (cos(theta/2) / (8 tan theta))^(1/3)                           (3)
  *   G = W g c^3                                                         (4)

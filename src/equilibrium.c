@@ -1,8 +1,8 @@
 /* equilibrium.c: the static drape by energy minimisation (equilibrium.h;
- * numerics.md 3.7; MODEL.md 3, 4, 6).
+ * numerics.md 3.7; docs/model.md 3, 4, 6).
  *
- * Unknowns: the 3 nf free coordinates y.  E(y) = E_pot (MODEL 3: stretch,
- * bend, shear, gravity), F = -grad E = the conservative force (MODEL 4),
+ * Unknowns: the 3 nf free coordinates y.  E(y) = E_pot (docs/model.md 3: stretch,
+ * bend, shear, gravity), F = -grad E = the conservative force (docs/model.md 4),
  * H = Hess E = -K (K = dF/dy from drape_model_jacobian, exact and
  * symmetric; unclamped: compressed springs, concave fit pieces and buckling
  * make it indefinite away from a minimum), M = lumped masses (diagonal).
@@ -103,17 +103,14 @@
 #define DRAPE_EQ_EIG_RTOL 1e-8
 
 /* CHOLMOD factorises supernodally at every size, with its own default
- * amalgamation (nrelax 4, 16, 48; zrelax 0.8, 0.1, 0.05).  From the
- * fourteenth to the twentieth session drape factorised simplicially up to
- * 600 unknowns and with coarser supernodes above (nrelax 8, 32, 128;
- * zrelax 0.5, 0.2), because each supernode opened an OpenMP region whose
- * end cost a futex call even in one thread.  Since the eighteenth session
- * drape's executable runs those regions in the calling thread (main.c,
- * GOMP_parallel), and the coarse supernodes' extra zeros cost more than
- * the calls they save: CPU per factorisation of the fall, the mean over a
- * specimen (seed 1), old / these settings, three runs interleaved
- * (docs/performance.md, "The fall's factorisation with CHOLMOD's own
- * supernodes"): Cusick 3 cm (156 unknowns) 0.042 / 0.028 ms, 2 cm (324)
+ * amalgamation (nrelax 4, 16, 48; zrelax 0.8, 0.1, 0.05).  drape's
+ * executable runs CHOLMOD's OpenMP regions in the calling thread (main.c,
+ * GOMP_parallel), so a supernode costs no futex call, and coarser
+ * supernodes (nrelax 8, 32, 128; zrelax 0.5, 0.2) or a simplicial
+ * factorisation of small systems cost more in extra zeros than they save:
+ * CPU per factorisation of the fall, the mean over a specimen (seed 1),
+ * coarse / default settings, three runs interleaved (docs/performance.md,
+ * "The fall's factorisation with CHOLMOD's own supernodes"): Cusick 3 cm (156 unknowns) 0.042 / 0.028 ms, 2 cm (324)
  * 0.130-0.131 / 0.074-0.079 ms, 1 cm (1368) 0.62-0.64 / 0.50-0.54 ms,
  * table 2 cm (1800) 0.99-1.02 / 0.82-0.84 ms, table 1 cm 7.7-9.4 /
  * 5.9-8.2 ms. */
@@ -716,11 +713,10 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
             low.v = low.x + n3;
         }
         int rcd = eq_fall(&w, x, &o, tmax, NULL, redo ? &low : NULL, err);
-        /* it gained energy: on from its lowest, error-controlled.  Until the
-         * twenty-third session the second fall started from the flat start;
-         * from the lowest state the table's three pumping specimens of 32
-         * at 1 cm cost 15-20 CPU s instead of 31-42, with the same
-         * histogram and mean within 0.001 (docs/ensemble.md, "Taking the
+        /* it gained energy: on from its lowest, error-controlled.  Against
+         * a second fall from the flat start, from the lowest state the
+         * table's three pumping specimens of 32 at 1 cm cost 15-20 CPU s
+         * instead of 31-42, with the same histogram and mean within 0.001 (docs/ensemble.md, "Taking the
          * pumping fall up again where its energy was lowest") */
         if (rcd == 3) {
             drape_equilibrium_opts o2 = o;

@@ -1,6 +1,6 @@
 /* fabric.c: load a fabric description (see fabric.h, docs/fabrics.md).
  *
- * Implements MODEL.md 1 (units: everything converted to SI once, here),
+ * Implements docs/model.md 1 (units: everything converted to SI once, here),
  * 3.1 (tensile stiffness k per direction, `k_warp`/`k_weft`), 3.4 (piecewise
  * polynomial fits: consecutive pieces from 0, the last one extending to
  * infinity, a value jump at a knot is an error, a slope jump is reported)
@@ -148,7 +148,7 @@ typedef struct knot_jumps {
 } knot_jumps;
 
 /* Read one list of pieces (`bending.warp`) into *fit in the file's units,
- * check it (MODEL.md 3.4), and convert it to SI.  Slope jumps at knots
+ * check it (docs/model.md 3.4), and convert it to SI.  Slope jumps at knots
  * are warned about one by one, or, with kj, gathered into *kj (curve: its
  * bit in kj->curves). */
 static int get_fit(const drape_yread *r, const drape_ynode *list,
@@ -255,12 +255,12 @@ static int get_fit(const drape_yread *r, const drape_ynode *list,
                                          path, i - 1, to_node[i - 1]->scalar);
         }
     }
-    /* the last piece extends to infinity (MODEL.md 3.4) */
+    /* the last piece extends to infinity (docs/model.md 3.4) */
     if (to_node[fit->n - 1]) {
         snprintf(pp, sizeof pp, "%s[%d].to", path, fit->n - 1);
         drape_yread_warn(r, to_node[fit->n - 1], pp,
                          "the last piece ends at %s but is extended to "
-                         "infinity (MODEL.md 3.4)",
+                         "infinity (docs/model.md 3.4)",
                          to_node[fit->n - 1]->scalar);
         fit->p[fit->n - 1].to = INFINITY;
     }
@@ -756,7 +756,7 @@ static int get_k(const drape_yread *r, const drape_ynode *n, const char *path,
     return 0;
 }
 
-/* `damping: {shear: T}` (MODEL.md 3.6): the fabric's internal shear
+/* `damping: {shear: T}` (docs/model.md 3.6): the fabric's internal shear
  * damping, a time; DRAPE_FABRIC_DAMPING_SHEAR when the key is absent. */
 static int get_damping(const drape_yread *r, const drape_ynode *root,
                        drape_fabric *f)

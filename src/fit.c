@@ -1,7 +1,7 @@
-/* fit.c: piecewise polynomial Kawabata fits (MODEL.md 3.4).
+/* fit.c: piecewise polynomial Kawabata fits (docs/model.md 3.4).
  *
  * y(x) = sum_k c_k x^k on [from, to) for each piece, extended as an odd
- * function y(-x) = -y(x) (MODEL 3.2: M(-K) = -M(K); 3.3: F(-g) = -F(g)).
+ * function y(-x) = -y(x) (docs/model.md 3.2: M(-K) = -M(K); 3.3: F(-g) = -F(g)).
  * W(x) = integral_0^|x| y(s) ds is even and exact: piece by piece,
  * integral_a^b sum c_k s^k ds = sum c_k (b^{k+1} - a^{k+1}) / (k + 1).
  * Polynomials are evaluated by Horner's rule.

@@ -1,7 +1,7 @@
 /* integrator.c: the integrator registry, the handle, and the first-order
  * right-hand side and Jacobian shared by all backends.
  *
- * Equations (MODEL.md 4, seed eqs. 16-17; numerics.md 3.1-3.2), over free
+ * Equations (docs/model.md 4, seed eqs. 16-17; numerics.md 3.1-3.2), over free
  * particles with y = [x_free; v_free]:
  *     x' = v                                   (kinematic part)
  *     v' = M^-1 f(x, v)                        (lumped masses)

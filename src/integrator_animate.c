@@ -1,5 +1,5 @@
 /* integrator_animate.c: "animate", a fixed-step backward Euler for frames
- * at graphics speed (issue 16, docs/animate.md).
+ * at graphics speed (docs/animate.md).
  *
  * Backward Euler from (x_n, v_n) over a step h, x = x_n + h v,
  *     M (v - v_n) = h f_c(x_n + h v) + h D_n v,

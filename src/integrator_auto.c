@@ -1,4 +1,4 @@
-/* integrator_auto.c: the "auto" backend (issue 4 item 3): cvode-bdf and
+/* integrator_auto.c: the "auto" backend: cvode-bdf and
  * arkode-erk, switching between them while it runs, like LSODA's switch
  * between BDF and Adams (Petzold 1983), on a work estimate from step counts
  * (never from clocks, so a run is reproducible).

@@ -1,6 +1,6 @@
 /* integrator_gsl.c: the GSL 2.7 gsl_odeiv2 backends gsl-msbdf and gsl-rk8pd.
  *
- * Problem (integrator.h, MODEL.md 4): y' = F(y), y = [x_free; v_free],
+ * Problem (integrator.h, docs/model.md 4): y' = F(y), y = [x_free; v_free],
  *     F(y) = [ v ; M^-1 f(x, v) ],   J = [ 0 I ; M^-1 K  M^-1 D ].
  *
  * gsl-msbdf  multistep BDF of orders 1-5 with Nordsieck history (Keskitalo's

@@ -1,7 +1,7 @@
 /* integrator_sundials.c: the SUNDIALS 6.4.1 backends cvode-bdf, arkode-imex,
  * arkode-dirk and arkode-erk.
  *
- * Problem (integrator.h, MODEL.md 4): y' = F(y), y = [x_free; v_free],
+ * Problem (integrator.h, docs/model.md 4): y' = F(y), y = [x_free; v_free],
  *     F(y) = [ v ; M^-1 f(x, v) ],   J = [ 0 I ; M^-1 K  M^-1 D ].
  *
  * cvode-bdf   CVODE, BDF orders 1..max_order (default 2: BDF orders 3-5

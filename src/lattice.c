@@ -1,4 +1,4 @@
-/* lattice.c: the particle lattice of a specimen (MODEL.md sections 2, 3, 5).
+/* lattice.c: the particle lattice of a specimen (docs/model.md sections 2, 3, 5).
  *
  * What it builds (see lattice.h for the world placement and docs/lattice.md
  * for the full description):
@@ -6,19 +6,19 @@
  *   - the grid: one particle per lattice point (i, j) at spacing sigma that
  *     lies in the specimen (rectangle, circle centred on a lattice point,
  *     strip with a particle exactly on the platform edge x = 0);
- *   - lumped masses (MODEL 2):  m_p = W * (A(C_p & S) + lumped),       (L1)
+ *   - lumped masses (docs/model.md 2):  m_p = W * (A(C_p & S) + lumped),       (L1)
  *     C_p the sigma x sigma cell centred on p, S the specimen, and
  *     "lumped" the area A(C_q & S) of every lattice point q that is not a
  *     particle, given in equal shares to the particle(s) nearest to q.  The
  *     cells of all lattice points tile the plane, so sum m_p = W * A(S)
  *     up to rounding;
- *   - element weights (MODEL 3), each the fraction of a full element's area
+ *   - element weights (docs/model.md 3), each the fraction of a full element's area
  *     that lies inside the specimen:
  *       edge   w_e = A(R_e & S) / sigma^2,  R_e: sigma (along) x sigma
  *              (across) rectangle centred on the edge's midpoint;     (L2)
  *       hinge  w_h = A(C_mid & S) / sigma^2 * lambda, length lambda = 1/2
  *              for the along-strip hinge at the last clamped particle of a
- *              cantilever, 1 otherwise (MODEL 5): that hinge stands for
+ *              cantilever, 1 otherwise (docs/model.md 5): that hinge stands for
  *              [0, sigma/2] only, so its area and the length its turning
  *              angle is spread over are both halved; the model uses
  *              K = psi / (lambda sigma).  Halving the weight alone (K still
@@ -28,14 +28,14 @@
  *              quarter cell between mid and its two neighbours;       (L4)
  *       cell   w_q = A(Q & S) / sigma^2, Q the square (i, j)-(i+1, j+1)
  *              whose four corners are particles; built only with the
- *              bias term and a fabric with a bias curve (issue 18);   (L5)
- *   - a strip cut at an angle to the yarns (issue 18): the rectangle
+ *              bias term and a fabric with a bias curve;   (L5)
+ *   - a strip cut at an angle to the yarns: the rectangle
  *     rotated in the grid, areas by polygon clipping (rot_area); hinges at
  *     the platform edge keep the part of their interval beyond it (L3'),
  *     and the areas of missing hinges and cells along the staircase edges
  *     are lumped onto the nearest ones (L6; weights may exceed 1);
  *   - the fixed set (clamps of each scene kind, pins) and free numbering;
- *   - the optional perturbation of free particles (MODEL.md 2): the
+ *   - the optional perturbation of free particles (docs/model.md 2): the
  *     smooth random height field of perturbation.h sampled at each rest
  *     position (x, y), z += w(x, y) h(x, y), w the Cusick scene's taper
  *     (r - r_support) / (r_specimen - r_support) clipped at 0 and 1
@@ -69,11 +69,11 @@ static const double SNAP = 1e-9;
 static const long MAX_GRID_POINTS = INT_MAX / 8;
 
 /* Part of the clamp hinge's vertex interval [-sigma/2, sigma/2] that
- * overhangs the platform edge x = 0 (MODEL 5). */
+ * overhangs the platform edge x = 0 (docs/model.md 5). */
 static const double CLAMP_HINGE_FRACTION = 0.5;
 
 /* Smallest such fraction of an oblique strip's hinge whose whole vertex
- * interval lies on the platform (issue 18): a hinge 1 / 0.05 = 20 times
+ * interval lies on the platform: a hinge 1 / 0.05 = 20 times
  * stiffer than a free one, which holds its yarn straight. */
 static const double CLAMP_HINGE_MIN = 0.05;
 
@@ -85,7 +85,7 @@ typedef struct geom {
     double lo[2], hi[2];  /* rectangle specimen, index units ([0]: i) */
     double ci, cj;        /* grid index of the world origin */
     int swap;             /* 1 (warp strip): x = (j - cj) s, y = -(i - ci) s */
-    int rot;              /* 1 (oblique strip, issue 18): the world position is
+    int rot;              /* 1 (oblique strip): the world position is
                              x = ((i - ci) rs + (j - cj) rc) s,
                              y = (-(i - ci) rc + (j - cj) rs) s, and lo/hi
                              bound the strip in those rotated index units */
@@ -325,7 +325,7 @@ static int geom_init(const drape_scene *s, geom *g, drape_error *err)
         double c_len = (double)nb, c_w = 0.5 * (double)(nw - 1);
         double lo_len = c_len - back / sp, hi_len = c_len + ov / sp;
         double lo_w = c_w - 0.5 * s->width / sp, hi_w = c_w + 0.5 * s->width / sp;
-        if (s->strip_oblique) { /* issue 18: the rotated rectangle */
+        if (s->strip_oblique) { /* the rotated rectangle */
             double a = s->strip_angle * 3.14159265358979323846 / 180.0;
             g->rot = 1;
             g->rs = sin(a);
@@ -521,7 +521,7 @@ static int nearest_hinge(const drape_lattice *L, const int *hid, int i, int j, i
     return best;
 }
 
-/* Oblique strip (issue 18, L6): along a staircase edge some particles lack
+/* Oblique strip (L6): along a staircase edge some particles lack
  * a neighbour in a yarn direction, so they carry no hinge in it, and some
  * squares inside the strip lack a corner, so there is no twist cell: that
  * area would bend and twist with no stiffness, a band about sigma wide
@@ -624,7 +624,7 @@ static int build_elements(drape_lattice *L, const geom *g,
                 h->prev = a; h->mid = p; h->next = b; h->dir = (drape_dir)d;
                 h->weight = frac(cell_area(g, i, j), 1.0);
                 h->length = 1.0;
-                /* cantilever clamp (MODEL 5, L3): the hinge at the last
+                /* cantilever clamp (docs/model.md 5, L3): the hinge at the last
                  * clamped particle, along the strip, stands for its
                  * overhanging half [0, sigma/2] only: half the area, and
                  * its turning psi is spread over sigma/2 (K = 2 psi/sigma) */
@@ -634,7 +634,7 @@ static int build_elements(drape_lattice *L, const geom *g,
                     h->weight *= CLAMP_HINGE_FRACTION;
                     h->length = CLAMP_HINGE_FRACTION;
                 }
-                /* oblique strip (issue 18, L3'): the same rule for yarns
+                /* oblique strip (L3'): the same rule for yarns
                  * that cross the platform edge x = 0 at an angle: the
                  * hinge stands for the part of its vertex interval
                  * [-sigma/2, sigma/2] (along its yarn) beyond the edge,
@@ -693,7 +693,7 @@ static int build_elements(drape_lattice *L, const geom *g,
     return 0;
 }
 
-/* The perturbation's taper w(x, y) (MODEL.md 2): in the Cusick scene
+/* The perturbation's taper w(x, y) (docs/model.md 2): in the Cusick scene
  * (r - r_support) / (r_specimen - r_support), clipped at 0, so the field
  * vanishes at the support's edge; 1 elsewhere. */
 static double taper(const drape_scene *s, const double *x)
@@ -704,7 +704,7 @@ static double taper(const drape_scene *s, const double *x)
     return w > 0.0 ? w : 0.0;
 }
 
-/* Raise the free particles by the scene's perturbation (MODEL.md 2,
+/* Raise the free particles by the scene's perturbation (docs/model.md 2,
  * perturbation.h): the smooth field, tapered, sampled at each rest
  * position; or amplitude * U(-1, 1) per particle in id order. */
 static int perturb(drape_lattice *L, const drape_scene *s, drape_error *err)

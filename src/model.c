@@ -1,25 +1,25 @@
 /* model.c: energies, forces and the exact sparse Jacobian of a particle
- * lattice (MODEL.md sections 3 and 4; seed eqs. 1, 10, 11, 14, 16-18).
+ * lattice (docs/model.md sections 3 and 4; seed eqs. 1, 10, 11, 14, 16-18).
  *
- * Energies (MODEL 3; w = element weight, sigma = spacing):
+ * Energies (docs/model.md 3; w = element weight, sigma = spacing):
  *   stretch edge   E = 1/2 k_dir w (l - sigma)^2                   (seed 1)
  *   bend hinge     a = x_mid - x_prev, b = x_next - x_mid,
- *                  psi = atan2(|a x b|, a.b)            (0 = flat, MODEL 3.2)
+ *                  psi = atan2(|a x b|, a.b)            (0 = flat, docs/model.md 3.2)
  *                  l = length sigma (lattice.h: 1/2 at a cantilever clamp)
  *       consistent K = psi/l,   E = w sigma^2 Wb(K), Wb = int_0^K M
  *       seed       K = 2 psi/l, E = w M(K) K sigma^2 / 2       (seed 10, 11)
  *   shear corner   a = x_warp - x_mid, b = x_weft - x_mid,
  *                  alpha = atan2(|a x b|, a.b), gamma = pi/2 - alpha
- *                        = atan2(a.b, |a x b|)                  (MODEL 3.3)
+ *                        = atan2(a.b, |a x b|)                  (docs/model.md 3.3)
  *       consistent E = w sigma^2/4 Ws(|gamma|), Ws = int_0^g F
  *       seed       E = w sigma^2/4 F(|gamma|) |gamma|               (seed 14)
- *   gravity        E = sum_i m_i g z_i                          (MODEL 3.5)
- * Dissipation (MODEL 3.6):
+ *   gravity        E = sum_i m_i g z_i                          (docs/model.md 3.5)
+ * Dissipation (docs/model.md 3.6):
  *   air drag       f_i = -c_air m_i v_i
  *   edge dashpot   f_b = -c_edge ((v_b - v_a).e) e, f_a = -f_b, e = unit(x_b - x_a)
  *   shear damping  f = -beta q F'(0) (dgamma/dt) grad gamma per corner
- *                  (not in MODEL.md: an optional scene dissipation, off
- *                  unless damping.shear is set; docs/model.md)
+ *                  (docs/model.md 3.6: the fabric's internal damping, on by
+ *                  default, beta from fabric, scene or command line)
  *
  * Forces are the exact negative gradient.  K = df/dx and D = df/dv are
  * exact, including the x-dependence of the dashpot direction e
@@ -442,7 +442,7 @@ static int kern_shear(const drape_model *m, const drape_corner *cn,
     return 0;
 }
 
-/* Shear damping of a corner (docs/model.md, "Shear damping"): the
+/* Shear damping of a corner (docs/model.md 3.6): the
  * dissipation function R = 1/2 kd (dgamma/dt)^2 with kd = beta q G0,
  * q = w sigma^2 / 4, G0 = F'(0) the initial slope of the fabric's mean
  * shear curve (the flat fabric's shear rigidity; clamped at 0), beta =
@@ -487,7 +487,7 @@ static int kern_shear_damp(const drape_model *m, const drape_corner *cn, const i
     return 0;
 }
 
-/* Twist cell (issue 18; docs/model.md, "Bias bending").  With the cell's
+/* Twist cell (docs/model.md, "Bias bending").  With the cell's
  * corners P0 = (i, j), P1 = (i+1, j), P2 = (i+1, j+1), P3 = (i, j+1):
  *     a  = P0 - P1 + P2 - P3   (its non-planarity: sigma^2 x_xy for a
  *                               surface x(u, v); zero for any cylinder

@@ -430,7 +430,7 @@ drape_model *drape_model_new(const drape_lattice *L, const drape_fabric *F,
     int use_edges = (m->parts & (DRAPE_PART_STRETCH | DRAPE_PART_EDGE)) != 0;
     int use_hinges = (m->parts & DRAPE_PART_BEND) != 0;
     int use_corners = (m->parts & (DRAPE_PART_SHEAR | DRAPE_PART_SHEAR_DAMPING)) != 0;
-    /* twist cells belong to bending (issue 18) */
+    /* twist cells belong to bending */
     int use_cells = use_hinges && L->n_cells > 0 && m->F.has_bias;
     m->use_cells = use_cells;
     if (build_blocks(L, use_edges, use_hinges, use_corners, use_cells, &bcol, &brow))

@@ -1,4 +1,4 @@
-/* output_png.c: the shadow picture as PNG (output.h; issue 15 item 6).
+/* output_png.c: the shadow picture as PNG (output.h).
  *
  * The picture is drawn once, as SVG (output_svg.c); the PNG is that SVG
  * rendered by librsvg into a cairo image surface and encoded by cairo's

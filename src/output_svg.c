@@ -1,4 +1,4 @@
-/* output_svg.c: the shadow picture of a drape test (output.h; issue 15,
+/* output_svg.c: the shadow picture of a drape test (output.h,
  * docs/outputs.md).
  *
  * What an image-analysis drape meter shows: the top view, the specimen at

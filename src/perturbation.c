@@ -1,4 +1,4 @@
-/* perturbation.c: the seeded imperfection of a specimen (MODEL.md section
+/* perturbation.c: the seeded imperfection of a specimen (docs/model.md section
  * 2): the smooth random height field (P1) of perturbation.h and the
  * generator both perturbation forms draw from. */
 #include "drape/perturbation.h"

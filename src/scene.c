@@ -1,9 +1,9 @@
-/* scene.c: load and validate a scene file (MODEL.md sections 5 and 6).
+/* scene.c: load and validate a scene file (docs/model.md sections 5 and 6).
  *
  * A scene names what to simulate: the kind of test (cusick, hang, table,
  * cantilever), the fabric file, the specimen, the lattice spacing sigma,
- * the energy terms and form (MODEL.md 3), dissipation (MODEL.md 3.6), the
- * integrator and its tolerances, the end condition (MODEL.md 6) and the
+ * the energy terms and form (docs/model.md 3), dissipation (docs/model.md 3.6), the
+ * integrator and its tolerances, the end condition (docs/model.md 6) and the
  * outputs.  docs/scenes.md lists every key, its unit, default and the
  * scenes that allow it.
  *
@@ -41,7 +41,7 @@ const char *const drape_integrator_names[] = {
 #define SCENE_CUSICK_SUPPORT 0.18   /* m, Cusick support disk */
 #define SCENE_RTOL 1e-4
 #define SCENE_ATOL 1e-7
-#define SCENE_EQ_SPEED 1e-4         /* m/s, MODEL.md 6 */
+#define SCENE_EQ_SPEED 1e-4         /* m/s, docs/model.md 6 */
 #define SCENE_EQ_WINDOW 0.2         /* s */
 #define SCENE_MAX_ORDER_MAX 5       /* BDF methods stop at order 5 */
 #define SCENE_STRAIN_LIMIT 0.2      /* end.strain_limit (diagnose.h, docs/scenes.md) */

@@ -6,7 +6,7 @@
  * value at fault (drape_scene_pos).  scene.c reads the file key by key.
  *
  * Lattice size (used for pins and the memory estimate; it must agree with
- * the lattice builder, MODEL.md section 2): a side of length W at spacing s
+ * the lattice builder, docs/model.md section 2): a side of length W at spacing s
  * holds floor(W/s + 1e-9) + 1 particles (the 1e-9 absorbs rounding in W/s,
  * e.g. 0.30/0.01 = 29.999999999999996); a circle of diameter d is centred on
  * a lattice point and holds about pi (d / 2s)^2 particles.
@@ -31,9 +31,8 @@
  * (--linear-solver klu, AMD ordering, no nested dissection) fills faster:
  *     bytes = B0 + n (a_klu + c_klu sqrt n)                        (M.2)
  * (21.6 KiB per particle at 959, 36.9 KiB at 5774; O(n^1.5) fill, the
- * AMD bound for a 2-D grid).  Until drape 6fe1cdc the estimate was a flat
- * 2 KiB per particle, 10-25 times too low (hang at 0.3 mm: 2 GiB
- * estimated, 21 GB resident when killed).  Scenes above 8 GiB or 20
+ * AMD bound for a 2-D grid).  A flat 2 KiB per particle would be 10-25
+ * times too low (hang at 0.3 mm: 2 GiB estimated, 21 GB resident).  Scenes above 8 GiB or 20
  * million particles are refused before anything is allocated.
  */
 #include "drape/scene.h"
@@ -88,7 +87,7 @@ static int pos_error(drape_error *err, const drape_scene *s,
                            msg);
 }
 
-/* Particles along a side of length w at spacing sp (MODEL.md 2). */
+/* Particles along a side of length w at spacing sp (docs/model.md 2). */
 static double grid_count(double w, double sp)
 {
     return floor(w / sp + SCENE_GRID_EPS) + 1.0;

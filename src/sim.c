@@ -1,7 +1,7 @@
 /* sim.c: the driver loop (sim.h): time, output points, end conditions,
  * statistics.
  *
- * End conditions (MODEL.md 6): t >= t_max, or equilibrium: the largest
+ * End conditions (docs/model.md 6): t >= t_max, or equilibrium: the largest
  * particle speed stays below eq_speed at every check over a span of
  * eq_window; checks are eq_window / DRAPE_SIM_EQ_CHECKS_PER_WINDOW apart
  * and read the integrator's dense output, so they never force small steps.
@@ -13,8 +13,8 @@
  * apart), which is integration error, not motion (docs/integrators.md).
  * The mean speed also sees motion between checks that the instantaneous
  * one missed.
- * Energies reported at the end: E_kin = 1/2 sum m_i |v_i|^2 (MODEL 4) and
- * the potential terms of drape_model_energy (MODEL 3).
+ * Energies reported at the end: E_kin = 1/2 sum m_i |v_i|^2 (docs/model.md 4) and
+ * the potential terms of drape_model_energy (docs/model.md 3).
  */
 #include "drape/sim.h"
 

@@ -1,4 +1,4 @@
-/* units.c: quantities with units (see units.h, MODEL.md section 1).
+/* units.c: quantities with units (see units.h, docs/model.md section 1).
  *
  * Grammar (whitespace allowed before the number, between number and unit,
  * and at the end):

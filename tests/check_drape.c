@@ -612,7 +612,7 @@ START_TEST(test_outline_smooth)
 }
 END_TEST
 
-/* Nodes count folds, not the lattice (MODEL.md 6): the 30 cm specimen on
+/* Nodes count folds, not the lattice (docs/model.md 6): the 30 cm specimen on
  * its 18 cm support, built here on square lattices of 2 to 0.25 cm, has no
  * node flat, and n when its skirt is pulled in to rho = 9 cm + (r - 9 cm)
  * c(phi), c = 0.45 + 0.12 cos(n phi + 0.3 + 0.4 sin phi) (n folds at

@@ -38,7 +38,7 @@
 #define CHAIN_N 10        /* particles, the first pinned */
 #define CHAIN_SIGMA 0.02  /* m */
 #define CHAIN_K 50.0      /* N/m */
-#define G_STD 9.80665     /* m/s^2 (MODEL.md 1) */
+#define G_STD 9.80665     /* m/s^2 (docs/model.md 1) */
 
 /* mass of chain particle i, kg: unequal on purpose */
 static double chain_mass(int i) { return 1e-3 * (1.0 + 0.1 * i); }

@@ -138,7 +138,7 @@ START_TEST(test_stiffness_forms)
 {
     drape_fabric f;
     drape_error err;
-    /* k_warp / k_weft (MODEL.md 3.1) with gf/cm */
+    /* k_warp / k_weft (docs/model.md 3.1) with gf/cm */
     int rc = load_text("fabric: t\nweight: 0.2\nk_warp: 5 gf/cm\n"
                        "k_weft: 3000 N/m\n" BEND P_ONE WEFT SHEAR, &f, &err,
                        NULL);
@@ -159,7 +159,7 @@ START_TEST(test_stiffness_forms)
 }
 END_TEST
 
-/* The internal shear damping (MODEL.md 3.6): `damping: {shear: T}` in any
+/* The internal shear damping (docs/model.md 3.6): `damping: {shear: T}` in any
  * time unit, 0 allowed (off), 0.5 ms when the key is absent. */
 START_TEST(test_damping_shear)
 {

@@ -5,7 +5,7 @@
  *   - agreement: each integrator at rtol 1e-5 against a reference made by a
  *     DIFFERENT integrator at rtol 1e-10, itself checked against a third
  *     (two independent libraries must agree to 1/100 of the tested bound);
- *   - conservation: without dissipation E_kin + E_pot is constant (MODEL 4:
+ *   - conservation: without dissipation E_kin + E_pot is constant (docs/model.md 4:
  *     forces are the exact negative gradient), with air drag and dashpots it
  *     never increases;
  *   - equilibrium: at the reported equilibrium the conservative forces

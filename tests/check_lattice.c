@@ -685,7 +685,7 @@ START_TEST(test_perturbation)
 }
 END_TEST
 
-/* The smooth field (MODEL.md 2) belongs to the specimen: the Cusick
+/* The smooth field (docs/model.md 2) belongs to the specimen: the Cusick
  * specimen at 1 cm and at 0.5 cm (every 1 cm lattice point is one of the
  * 0.5 cm lattice) has the same height at the same material point; the
  * height is the taper (r - r_support) / (r_specimen - r_support) times the
@@ -707,7 +707,7 @@ START_TEST(test_perturbation_field_spacing)
     double lo, hi;
     int modes;
     drape_scene_perturbation_band(&s, &lo, &hi, &modes);
-    ck_assert(lo == 0.02 && hi == 2 * R && modes == 64); /* MODEL.md's defaults */
+    ck_assert(lo == 0.02 && hi == 2 * R && modes == 64); /* the model's (docs/model.md) defaults */
     ck_assert_int_eq(drape_field_draw(&F, 5, 64, 0.02, 2 * R, A), 0);
     int shared = 0, raised = 0;
     double zmax = 0.0;

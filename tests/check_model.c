@@ -6,7 +6,7 @@
  * energies computed here by hand (the fits are integrated in closed form by
  * this file's own evaluator), and invariances / conservation laws.
  * Lattices are built by hand here (tl_grid: an nx x ny rectangle with
- * MODEL 3's boundary weights; small custom lattices for single hinges and
+ * docs/model.md 3's boundary weights; small custom lattices for single hinges and
  * corners).  Set CHECK_MODEL_VERBOSE=1 to print the observed errors.
  */
 #include <check.h>
@@ -195,7 +195,7 @@ static void tl_free(drape_lattice *L)
 static int gid(int nx, int i, int j) { return j * nx + i; }
 
 /* nx x ny rectangle, i along x (weft), j along y (warp), centred; edges,
- * hinges and quarter-cell corners with MODEL 3 weights: an edge or hinge in
+ * hinges and quarter-cell corners with docs/model.md 3 weights: an edge or hinge in
  * a boundary row or column carries half the width; every corner of a
  * rectangle is a whole quarter cell.  Masses W x (cell area inside).
  * fixed: list of particle ids (nfix of them). */
@@ -1712,7 +1712,7 @@ START_TEST(test_shear_damping)
 }
 END_TEST
 
-/* Where the shear damping's beta comes from (MODEL.md 3.6): a fabric file
+/* Where the shear damping's beta comes from (docs/model.md 3.6): a fabric file
  * without `damping` gives 0.5 ms; a fabric's own value is used where the
  * scene gives none; the scene's (or the command line's) wins, 0 off.  The
  * force is linear in beta, so each model's damping force is checked

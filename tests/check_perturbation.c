@@ -1,4 +1,4 @@
-/* check_perturbation.c: the smooth random height field of MODEL.md section 2
+/* check_perturbation.c: the smooth random height field of docs/model.md section 2
  * (perturbation.h), against its defining statistics:
  * - over seeds, phi = h / A has mean 0 and mean square 1 at any point;
  * - its mean squared slope is A^2 4 pi^2 / (lambda_min lambda_max) (P2);

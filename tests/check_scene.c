@@ -350,7 +350,7 @@ START_TEST(test_options)
     ck_assert_int_eq(s.has_perturbation, 1);
     ck_assert(s.perturb_amplitude == 0.0);
     ck_assert_uint_eq(s.perturb_seed, 0);
-    ck_assert_int_eq(s.perturb_kind, DRAPE_PERTURB_FIELD); /* MODEL.md 2's default */
+    ck_assert_int_eq(s.perturb_kind, DRAPE_PERTURB_FIELD); /* docs/model.md 2's default */
     ck_assert(s.perturb_lambda_min == 0.0 && s.perturb_lambda_max == 0.0 && s.perturb_modes == 0);
     ck_assert_int_eq(s.energy_form, DRAPE_FORM_SEED);
     ck_assert_uint_eq(s.terms, DRAPE_TERM_GRAVITY | DRAPE_TERM_BEND);
@@ -744,7 +744,7 @@ START_TEST(test_bad_ranges)
 }
 END_TEST
 
-/* The perturbation's keys (MODEL.md 2): the form, the band, the modes. */
+/* The perturbation's keys (docs/model.md 2): the form, the band, the modes. */
 START_TEST(test_perturbation_keys)
 {
     drape_scene s;

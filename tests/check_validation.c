@@ -1153,7 +1153,7 @@ END_TEST
 
 START_TEST(test_cantilever_convergence)
 {
-    /* second order in sigma (MODEL 5), and Richardson's extrapolation from
+    /* second order in sigma (docs/model.md 5), and Richardson's extrapolation from
      * 20 and 40 particles lands on the elastica */
     cant_run c10, c20, c40;
     cantilever_run(8, 10, V_K, 0, &c10);
@@ -1218,7 +1218,7 @@ static void load_fabric(const char *rel, drape_fabric *F)
 START_TEST(test_kawabata_round_trip)
 {
     /* the consistent form carries exactly the fit's moment and force
-     * (MODEL 3.2, 3.3); issue 5 asks for 1 %, the form promises rounding */
+     * (docs/model.md 3.2, 3.3); issue 5 asks for 1 %, the form promises rounding */
     drape_fabric F;
     load_fabric("fabrics/cotton-breen.yaml", &F);
     patch P;

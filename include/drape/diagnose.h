@@ -1,5 +1,5 @@
 /* diagnose.h: numerical faults of a simulated state and where they are
- * (issue 7, item 7; docs/reliability.md "Numerical faults").
+ * (docs/reliability.md "Numerical faults").
  *
  * The driver (sim.c) checks the state at every output point; a fault stops
  * the run (status failed, E_NUMERIC) before the state is handed to an

@@ -1,4 +1,4 @@
-/* drape.h: observers of a lattice state (MODEL.md section 6): the drape
+/* drape.h: observers of a lattice state (docs/model.md section 6): the drape
  * coefficient and the shadow of a draped specimen, the cantilever's tip
  * angle and Peirce bending length, and the lattice's quad faces.
  *
@@ -23,7 +23,7 @@ int *drape_quads_new(const drape_lattice *L, int *n_quads, drape_error *err);
 
 /* ---- drape coefficient and shadow --------------------------------------
  *
- *   DC = (A_shadow - A_disk) / (A_specimen - A_disk)            (MODEL 6)
+ *   DC = (A_shadow - A_disk) / (A_specimen - A_disk)            (docs/model.md 6)
  *
  * A_shadow: area of the union of the horizontal projections of all faces at
  * positions x.  Each quad is split into four triangles about the mean of

@@ -1,4 +1,4 @@
-/* ensemble.h: statistics of repeated specimens (MODEL.md 6, "Repeated
+/* ensemble.h: statistics of repeated specimens (docs/model.md 6, "Repeated
  * specimens"; docs/ensemble.md).
  *
  * Where a scene has several stable rest states, one run's drape

@@ -1,5 +1,5 @@
 /* equilibrium.h: the static drape by energy minimisation (numerics.md 3.7,
- * MODEL.md 6), the fast path for scenes that ask only for the equilibrium.
+ * docs/model.md 6), the fast path for scenes that ask only for the equilibrium.
  *
  * Finds free positions x* with F(x*) = -grad E_pot(x*) = 0 (E_pot = stretch +
  * bend + shear + gravity, the model's conservative parts; damping does not

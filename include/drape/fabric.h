@@ -3,10 +3,10 @@
  * File format: see fabrics/cotton-breen.yaml and docs/fabrics.md.  Two ways
  * to give bending and shear:
  *   - piecewise fits (`bending: {units, warp, weft}`, `shear: {units, warp,
- *     weft}` or a single `shear` curve), MODEL.md 3.4;
+ *     weft}` or a single `shear` curve), docs/model.md 3.4;
  *   - KES-F summary values per direction (`kes:` block: B, 2HB, G, 2HG, ...),
  *     turned into piecewise fits by the construction in docs/fabrics.md.
- * Everything is stored in SI (MODEL.md section 1).
+ * Everything is stored in SI (docs/model.md section 1).
  */
 #ifndef DRAPE_FABRIC_H
 #define DRAPE_FABRIC_H
@@ -18,13 +18,12 @@
 #define DRAPE_FABRIC_TEXT_MAX 4096
 
 /* The internal shear damping beta of a fabric whose file gives none
- * (`damping: {shear: T}`), s: MODEL.md 3.6.  A viscous shear stress
- * beta G0 dgamma/dt, G0 the slope of the mean shear curve at zero shear;
- * docs/model.md, "Shear damping", says what it stands for. */
+ * (`damping: {shear: T}`), s: docs/model.md 3.6.  A viscous shear stress
+ * beta G0 dgamma/dt, G0 the slope of the mean shear curve at zero shear. */
 #define DRAPE_FABRIC_DAMPING_SHEAR 0.5e-3
 
 /* Material directions.  The lattice's i axis runs along the weft, j along
- * the warp (MODEL.md section 2). */
+ * the warp (docs/model.md section 2). */
 typedef enum drape_dir { DRAPE_WEFT = 0, DRAPE_WARP = 1 } drape_dir;
 
 typedef struct drape_fabric {
@@ -36,7 +35,7 @@ typedef struct drape_fabric {
     double k[2];          /* tensile stiffness per unit width, N/m, [DRAPE_WEFT], [DRAPE_WARP] */
     drape_fit bend[2];    /* M(K): K in 1/m, M in N.m/m, per direction */
     drape_fit bend_bias;  /* M(K) of a strip cut at 45 degrees (optional
-                             `bending.bias`, issue 18); valid if has_bias */
+                             `bending.bias`); valid if has_bias */
     int has_bias;
     drape_fit shear[2];   /* F(gamma): gamma in rad, F in N/m, per direction
                              (both equal when the file gives one curve) */
@@ -44,7 +43,7 @@ typedef struct drape_fabric {
     int from_kes;         /* 1 if built from KES-F summary values */
     double damping_shear; /* internal shear damping beta, s (`damping:
                              {shear: T}`; DRAPE_FABRIC_DAMPING_SHEAR when
-                             absent; 0 = none), MODEL.md 3.6 */
+                             absent; 0 = none), docs/model.md 3.6 */
 } drape_fabric;
 
 /* Load a fabric file.  Returns 0 and fills *f, or -1 and fills err with

@@ -1,4 +1,4 @@
-/* fit.h: piecewise polynomial fits of Kawabata curves (MODEL.md 3.4).
+/* fit.h: piecewise polynomial fits of Kawabata curves (docs/model.md 3.4).
  *
  * A fit y(x) is a list of polynomial pieces on consecutive intervals
  * [from, to) starting at x = 0; coefficients are in ascending powers of x

@@ -1,9 +1,9 @@
-/* integrator.h: time integrators for the particle model (MODEL.md section 4)
+/* integrator.h: time integrators for the particle model (docs/model.md section 4)
  * behind one small vtable (STYLE.md 10).
  *
  * The ODE.  Unknowns are the free particles only, blocked
  *     y = [ x_free (3 nf) ; v_free (3 nf) ],   dim = 6 nf,
- *     x' = v,   v' = M^-1 f(x, v)                           (MODEL 4, seed 16-17)
+ *     x' = v,   v' = M^-1 f(x, v)                           (docs/model.md 4, seed 16-17)
  * Fixed particles stay at lattice->xinit with v = 0.  The right-hand side
  * scatters y into full x, v, calls drape_model_forces and gathers f / m.
  *
@@ -33,7 +33,7 @@
  *   animate      fixed step opts.fixed_step, one linearised backward Euler
  *                solve per step with the exact Jacobian (Baraff & Witkin
  *                1998), CHOLMOD on M - h D - h^2 K; rtol and atol unused
- *                (src/integrator_animate.c, docs/animate.md; issue 16).
+ *                (src/integrator_animate.c, docs/animate.md).
  *
  * Errors.  Every solver failure sets a drape_error of kind DRAPE_E_NUMERIC
  * whose message names the integrator, the time, the solver's reason (the
@@ -70,13 +70,13 @@ typedef struct drape_integrator_opts {
     const volatile sig_atomic_t *stop; /* when *stop != 0 every right-hand
                            side fails at once (unrecoverably), so step_to
                            returns within one evaluation (SIGINT/SIGTERM,
-                           issue 7); NULL = never */
+                           docs/reliability.md); NULL = never */
     double auto_hw;     /* auto: BDF2's h omega below which it switches to
                            arkode-erk; 0 = from the step Dormand-Prince took
                            (integrator_auto.c;
                            tests raise it to force switches) */
     double fixed_step;  /* animate: its fixed step, s (> 0 required there;
-                           ignored by the others) (added, issue 16) */
+                           ignored by the others) */
 } drape_integrator_opts;
 
 /* Linear solver of the Newton systems (I - gamma J) dy = r of cvode-bdf,
@@ -134,7 +134,7 @@ typedef struct drape_integrator_stats {
                        the other backends */
     long energy_rescales; /* animate: steps whose velocities were scaled down
                        so that the total energy did not rise; -1 for the
-                       others (added, issue 16) */
+                       others */
 } drape_integrator_stats;
 
 /* ---- Backend interface --------------------------------------------------

@@ -1,4 +1,4 @@
-/* lattice.h: the particle lattice of a specimen (MODEL.md sections 2, 3, 5).
+/* lattice.h: the particle lattice of a specimen (docs/model.md sections 2, 3, 5).
  *
  * One particle per warp/weft crossing at spacing sigma.  Grid index (i, j):
  * i counts along the weft, j along the warp.  The lattice lists the model's
@@ -40,7 +40,7 @@ typedef struct drape_hinge {
     double weight;  /* area fraction of the hinge's sigma x sigma patch */
     double length;  /* (added) fraction of sigma over which the hinge's turning
                        angle psi is spread: 1, or 1/2 for the hinge at a
-                       cantilever's last clamped particle (MODEL 5).  The
+                       cantilever's last clamped particle (docs/model.md 5).  The
                        model takes K = psi / (length sigma) (seed form:
                        2 psi / (length sigma)) and E = weight sigma^2 Wb(K);
                        weight already includes the factor `length`.
@@ -54,7 +54,7 @@ typedef struct drape_corner {
     double weight;  /* area fraction of the quarter cell, 1 when whole */
 } drape_corner;
 
-/* Twist cell (issue 18, the `bias` term): the lattice square with lower
+/* Twist cell (the `bias` term): the lattice square with lower
  * left corner p[0] = (i, j) and, counter-clockwise, p[1] = (i+1, j),
  * p[2] = (i+1, j+1), p[3] = (i, j+1). */
 typedef struct drape_cell {

@@ -1,12 +1,12 @@
 /* model.h: the mechanical model of a lattice: energies, forces and their
- * exact sparse Jacobian (MODEL.md sections 3, 4).
+ * exact sparse Jacobian (docs/model.md sections 3, 4).
  *
- *   E_pot = E_stretch + E_bend + E_shear + E_gravity       (MODEL 3, seed 18)
- *   m_i dv_i/dt = -dE_pot/dx_i + f_diss,i,  dx_i/dt = v_i  (MODEL 4, seed 16-17)
- *   f_air  = -c_air m v,  f_edge = -c_edge ((v_b - v_a).e) e  (MODEL 3.6)
+ *   E_pot = E_stretch + E_bend + E_shear + E_gravity       (docs/model.md 3, seed 18)
+ *   m_i dv_i/dt = -dE_pot/dx_i + f_diss,i,  dx_i/dt = v_i  (docs/model.md 4, seed 16-17)
+ *   f_air  = -c_air m v,  f_edge = -c_edge ((v_b - v_a).e) e  (docs/model.md 3.6)
  *   f_shear_damping = -beta_shear q G0 (dgamma/dt) grad gamma per shear corner
- *                     (q its area / 4, G0 the flat fabric's shear rigidity) (docs/model.md, "Shear damping"; not in MODEL.md:
- *                     an optional scene dissipation, off unless set)
+ *                     (q its area / 4, G0 the flat fabric's shear rigidity;
+ *                     docs/model.md 3.6: on by default, 0.5 ms)
  *
  * Force "parts" are selected by a bit mask so an IMEX integrator can put
  * some in its implicit and some in its explicit partition; parts that the
@@ -58,7 +58,7 @@ typedef struct drape_model_opts {
     double c_edge;                /* N.s/m, 0 = off */
     double g;                     /* m/s^2, along -z (DRAPE_G_STANDARD) */
     double beta_shear;            /* s, 0 = off: the internal shear
-                                     damping (MODEL.md 3.6), a viscous
+                                     damping (docs/model.md 3.6), a viscous
                                      shear force per length beta_shear G0
                                      dgamma/dt, G0 the initial slope of the
                                      shear curve; DRAPE_SCENE_DAMPING_SHEAR_FABRIC

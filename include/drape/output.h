@@ -1,4 +1,4 @@
-/* output.h: frame files of a run (issue 3 item 5; docs/outputs.md).
+/* output.h: frame files of a run (docs/outputs.md).
  *
  * Two writers, both opaque handles that borrow the lattice (it must
  * outlive them) and write every file under a temporary name in the target
@@ -51,7 +51,7 @@ drape_obj *drape_obj_new(const char *dir, const drape_lattice *L,
                          drape_error *err);
 void drape_obj_free(drape_obj *o);
 /* Remove every file this handle wrote (a failed run leaves no frame of its
- * own behind; issue 7), then free it.  NULL is a no-op. */
+ * own behind), then free it.  NULL is a no-op. */
 void drape_obj_discard(drape_obj *o);
 /* Number of distinct files written so far. */
 int drape_obj_written(const drape_obj *o);
@@ -91,7 +91,7 @@ typedef struct drape_h5_final {
     int n_stats;
     const char *fabric_yaml;  /* full text of the fabric file */
     const char *scene_yaml;   /* full text of the scene file */
-    /* added (issue 7): the run's options and resume state -> /run */
+    /* the run's options and resume state -> /run */
     const drape_kv *run;
     int n_run;
 } drape_h5_final;
@@ -135,7 +135,7 @@ int drape_h5_commit(drape_h5 *h, drape_error *err);
  * no-op. */
 void drape_h5_discard(drape_h5 *h);
 
-/* ---- reading back (drape run --resume; issue 7) ------------------------- */
+/* ---- reading back (drape run --resume) ---------------------------------- */
 
 /* What a finished or interrupted run left in a drape.h5: /final, the
  * attributes of /run and /stats, the input texts.  Every pointer is owned
@@ -167,7 +167,7 @@ const drape_kv *drape_kv_find(const drape_kv *kv, int n, const char *key);
  * run keeps the frames of the interrupted one.  0 or -1 with err set. */
 int drape_h5_copy_frames(drape_h5 *h, const char *path, drape_error *err);
 
-/* ---- shadow picture (output_svg.c; issue 15) ------------------------------ */
+/* ---- shadow picture (output_svg.c) --------------------------------------- */
 
 /* One specimen's shadow outline: its outer radius r[k] at angle
  * theta_k = 2 pi k / n around (cx, cy) (drape_dc_radii), m. */

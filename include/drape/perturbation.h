@@ -1,4 +1,4 @@
-/* perturbation.h: the seeded imperfection of a specimen (MODEL.md section 2).
+/* perturbation.h: the seeded imperfection of a specimen (docs/model.md section 2).
  *
  * A smooth random height field defined in physical coordinates, the same
  * field at every lattice spacing for a given seed:
@@ -29,7 +29,7 @@
 
 #include <stdint.h>
 
-/* Defaults of MODEL.md section 2. */
+/* Defaults of docs/model.md section 2. */
 #define DRAPE_FIELD_MODES 64          /* plane waves M */
 #define DRAPE_FIELD_MODES_MAX 1024    /* the most a scene may ask for */
 #define DRAPE_FIELD_LAMBDA_MIN 0.02   /* shortest wavelength, m */

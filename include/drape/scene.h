@@ -1,6 +1,6 @@
 /* scene.h: what to simulate, loaded from a scene YAML file.
  *
- * Scenes (MODEL.md section 5): cusick, hang, table, cantilever.  See
+ * Scenes (docs/model.md section 5): cusick, hang, table, cantilever.  See
  * the files in scenes/ and docs/scenes.md for every key, its unit and
  * default.
  * All quantities are stored in SI.  The fabric path is resolved relative to
@@ -29,7 +29,7 @@ typedef enum drape_shape {
 } drape_shape;
 
 typedef enum drape_energy_form {
-    DRAPE_FORM_CONSISTENT, /* MODEL.md 3.2/3.3 default */
+    DRAPE_FORM_CONSISTENT, /* docs/model.md 3.2/3.3 default */
     DRAPE_FORM_SEED        /* the paper as printed */
 } drape_energy_form;
 
@@ -39,7 +39,7 @@ enum {
     DRAPE_TERM_BEND = 1u << 1,
     DRAPE_TERM_SHEAR = 1u << 2,
     DRAPE_TERM_GRAVITY = 1u << 3,
-    DRAPE_TERM_BIAS = 1u << 4,  /* twist cells (issue 18): built only where
+    DRAPE_TERM_BIAS = 1u << 4,  /* twist cells: built only where
                                    the fabric gives bending.bias, and with
                                    bend */
     DRAPE_TERM_ALL = 0x1fu
@@ -55,7 +55,7 @@ typedef enum drape_method {
                              solver (equilibrium.h, dyn_time; docs/ensemble.md) */
     DRAPE_METHOD_ANIMATE  /* the equations of motion at a fixed step tied to
                              the frame rate (integrator "animate";
-                             docs/animate.md, issue 16) */
+                             docs/animate.md) */
 } drape_method;
 
 /* "default", "dynamic", "static", "fall", "animate", NULL */
@@ -66,7 +66,7 @@ extern const char *const drape_term_names[];
 int drape_scene_terms_parse(const char *list, unsigned *terms);
 extern const char *const drape_method_names[];
 
-/* Repeated specimens (MODEL.md 6): at most this many per run. */
+/* Repeated specimens (docs/model.md 6): at most this many per run. */
 #define DRAPE_SCENE_SPECIMENS_MAX 1000
 #define DRAPE_SCENE_SPECIMENS_MAX_TEXT "1000"
 /* The largest perturbation seed (scene and --seed), and of seed + k over an
@@ -75,7 +75,7 @@ extern const char *const drape_method_names[];
 #define DRAPE_SCENE_SEED_MAX 9007199254740991UL
 #define DRAPE_SCENE_SEED_MAX_TEXT "2^53 - 1 (9007199254740991)"
 
-/* perturbation.kind (MODEL.md section 2): the smooth random height field
+/* perturbation.kind (docs/model.md section 2): the smooth random height field
  * of perturbation.h, or amplitude * U(-1, 1) on each free particle. */
 typedef enum drape_perturb_kind {
     DRAPE_PERTURB_FIELD = 0,
@@ -107,7 +107,7 @@ typedef struct drape_scene {
     double diameter;  /* circle, m */
     double length;    /* strip, m */
     drape_dir strip_dir; /* strip: material direction of its length */
-    int strip_oblique;   /* strip cut at an angle to the yarns (issue 18) */
+    int strip_oblique;   /* strip cut at an angle to the yarns */
     double strip_angle;  /* with strip_oblique: angle of its length from the
                             warp, degrees, in (0, 90) (`bias` = 45) */
 
@@ -137,7 +137,7 @@ typedef struct drape_scene {
     double damping_air;            /* 1/s, 0 = off */
     double damping_edge;           /* N.s/m, 0 = off */
     double damping_shear;          /* s, 0 = off: the internal shear damping
-                                      (MODEL.md 3.6); < 0
+                                      (docs/model.md 3.6); < 0
                                       (DRAPE_SCENE_DAMPING_SHEAR_FABRIC, the
                                       loader's default) = the fabric's, see
                                       drape_scene_damping_shear */
@@ -148,19 +148,17 @@ typedef struct drape_scene {
     drape_method method;           /* solver.method; DEFAULT when not given */
     double fall_time, fall_step;   /* solver.fall_time, fall_step, s; 0 = the
                                       fall method's defaults */
-    double fall_swing;             /* solver.fall_swing (ninth session): the
+    double fall_swing;             /* solver.fall_swing: the
                                       fall goes on past fall_time while the
                                       kinetic energy exceeds this fraction of
                                       its peak; < 0 = the scene's default
                                       (DRAPE_FALL_SWING, the table
                                       DRAPE_FALL_SWING_TABLE), 0 = off */
-    double fall_fold_time;         /* solver.fall_fold_time, s (seventeenth
-                                      session): the first part of the fall,
+    double fall_fold_time;         /* solver.fall_fold_time, s: the first part of the fall,
                                       while the folds form, at half the fall
                                       step; < 0 = DRAPE_FALL_FOLD_TIME of the
                                       fall time, 0 = none */
-    double fall_retry;             /* solver.fall_retry, s (nineteenth
-                                      session): a longer step of the fall
+    double fall_retry;             /* solver.fall_retry, s: a longer step of the fall
                                       refused for raising its total energy
                                       is tried again this long after, once
                                       (drape_equilibrium_opts.dyn_retry);
@@ -169,13 +167,12 @@ typedef struct drape_scene {
                                       the specimens swinging to the longest
                                       fall, docs/ensemble.md, "Trying the
                                       longer step again") */
-    double fall_tol;               /* solver.fall_tol, m (eleventh session): > 0:
+    double fall_tol;               /* solver.fall_tol, m: > 0:
                                       the fall's step is chosen by its error
                                       in position (drape_equilibrium_opts.
                                       dyn_tol); 0 = the fixed fall_step */
     int substeps;                  /* solver.substeps: animate steps per frame
-                                      interval; 0 = DRAPE_ANIMATE_SUBSTEPS (added,
-                                      issue 16) */
+                                      interval; 0 = DRAPE_ANIMATE_SUBSTEPS */
     int specimens;                 /* specimens: repeated specimens with seeds
                                       seed, seed + 1, ... (default 1) */
 
@@ -185,7 +182,7 @@ typedef struct drape_scene {
     double t_max;                  /* s */
     double strain_limit;           /* end.strain_limit: a run whose largest stretch
                                       strain exceeds it stops (failed); default
-                                      0.2 (added, issue 7; docs/scenes.md) */
+                                      0.2 (docs/scenes.md) */
 
     int has_frames;
     double frame_every;            /* s */
@@ -287,7 +284,7 @@ int drape_scene_check_memory(const drape_scene *s, drape_scene_mem_solver solver
  * DRAPE_FALL_SWING of its peak, up to DRAPE_FALL_TIME_MAX t_fall
  * (docs/ensemble.md, "The swing criterion"). */
 #define DRAPE_FALL_SWING 0.02
-/* The table scene's fall ends at t_fall (twenty-ninth session): there the
+/* The table scene's fall ends at t_fall: there the
  * swing's longer step is refused (it pumps energy into the hem compressed
  * over the table's edges), so the swing ran at the fold step, a quarter
  * to a third of a specimen's CPU, and changed no statistic that was
@@ -307,7 +304,7 @@ int drape_scene_check_memory(const drape_scene *s, drape_scene_mem_solver solver
  * at this tolerance (--fall-tol; exact Jacobian, rising steps refused):
  * docs/ensemble.md, "Energy gained by the fixed-step fall".  30 um is the
  * tolerance at which the error-controlled fall was measured against the
- * accurate ensembles (eleventh to fourteenth sessions). */
+ * accurate ensembles. */
 #define DRAPE_FALL_REDO_TOL 30e-6
 /* Iterations of the static solver after the fall (the static method keeps
  * its 500; docs/ensemble.md). */

@@ -1,14 +1,14 @@
 /* sim.h: the driver loop.  It owns simulated time, runs one integrator
  * (integrator.h) from the lattice's initial state, calls an observer between
  * steps (initial state, frame times, end), decides when to stop (t_max or
- * equilibrium, MODEL.md 6) and collects statistics.
+ * equilibrium, docs/model.md 6) and collects statistics.
  *
  * Output points.  The integrator is advanced to each output point with
  * dense output (it is not forced to step there, except at t_max, which is
  * its stop time): frame times k * frame_every, equilibrium checks
  * j * eq_window / DRAPE_SIM_EQ_CHECKS_PER_WINDOW, and t_max.
  *
- * Equilibrium (MODEL.md 6).  At each check the largest particle speed
+ * Equilibrium (docs/model.md 6).  At each check the largest particle speed
  * averaged over the interval since the previous check is taken,
  * max_i |x_i(t_k) - x_i(t_k-1)| / (t_k - t_k-1); the run stops with status
  * "equilibrium" once every check over a span of eq_window has seen a speed
@@ -17,7 +17,7 @@
  * error; sim.c), and sees every net motion between checks; an oscillation
  * whose period divides the check interval (eq_window / 4) would pass.
  *
- * Faults and interruption (issue 7; docs/reliability.md).  At every output
+ * Faults and interruption (docs/reliability.md).  At every output
  * point after the start the state is checked (diagnose.h: NaN/inf, strain
  * above strain_limit, energy blow-up) before any observer sees it; a fault
  * ends the run with status failed and an E_NUMERIC error naming the time,
@@ -54,7 +54,7 @@ typedef enum drape_sim_status {
     DRAPE_SIM_EQUILIBRIUM,
     DRAPE_SIM_T_MAX,
     DRAPE_SIM_FAILED,
-    DRAPE_SIM_INTERRUPTED  /* opts.stop was raised (added, issue 7) */
+    DRAPE_SIM_INTERRUPTED  /* opts.stop was raised */
 } drape_sim_status;
 
 /* "equilibrium", "t_max", "failed", "interrupted". */
@@ -72,7 +72,6 @@ typedef struct drape_sim_opts {
     int linsol;          /* drape_linsol (integrator.h); 0 = auto */
     long max_steps;      /* per output interval; 0 = default */
     int observe_progress; /* 1: also call the observer at every other output point */
-    /* added (issue 7) */
     const volatile sig_atomic_t *stop; /* polled at output points and in every
                                           right-hand side; NULL = never */
     double strain_limit; /* stop (failed) above this strain; 0 = no limit */
@@ -81,7 +80,7 @@ typedef struct drape_sim_opts {
     const double *x0, *v0; /* resume: start state, 3n each (NULL: lattice xinit, rest) */
     double eq_below_since; /* resume: start of the slow span at t0, s; -1 = none */
     const drape_diag_ref *diag_ref; /* resume: energy reference; NULL = the start state */
-    double fixed_step;   /* integrator "animate": its step, s (added, issue 16) */
+    double fixed_step;   /* integrator "animate": its step, s */
 } drape_sim_opts;
 
 /* Defaults: "auto", rtol 1e-4, atol 1e-7 m, t_max 20 s, no equilibrium
@@ -128,7 +127,6 @@ typedef struct drape_sim_result {
     long frames;         /* observer calls with DRAPE_SIM_AT_FRAME */
     double *x, *v;       /* final state, 3n each (failure: last finite state);
                             free with drape_sim_result_free */
-    /* added (issue 7) */
     drape_diagnosis diagnosis; /* kind NONE unless a numerical fault stopped the run */
     double eq_below_since;     /* at t_end_s (for a resume), s; -1 = none */
     double check_speed;        /* largest particle speed averaged over the

@@ -1,6 +1,6 @@
 /* units.h: quantities with units, as written in drape's input files and on
  * its command line ("20 mg/cm^2", "10000 N/m", "1 cm", "2 1/s", "1/30 s",
- * "5mm", "0.02 N.s/m", "1e-5 m/s").  See MODEL.md section 1.
+ * "5mm", "0.02 N.s/m", "1e-5 m/s").  See docs/model.md section 1.
  *
  * A quantity is a number (decimal, exponent, or a fraction "a/b" of two
  * decimals) optionally followed by a unit, with or without a space.  A unit

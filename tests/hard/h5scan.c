@@ -12,7 +12,7 @@
  *
  * STRAIN is the largest |l - l0| / l0 over the lattice edges (warp and weft
  * neighbours), PSI the largest turning angle pi - atan2(|u x w|, u . w)
- * over the bending hinges (MODEL.md 3.1, 3.2), both computed here from the
+ * over the bending hinges (docs/model.md 3.1, 3.2), both computed here from the
  * positions and the grid indices, independently of drape's model code.
  * Exit status 0 if the file could be read (whatever it contains), 1 if not.
  * Built by scripts/check-hard.sh with the hdf5-serial flags; not part of
