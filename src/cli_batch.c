@@ -18,6 +18,7 @@
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <json-c/json.h>
@@ -352,12 +353,31 @@ out:
     return rc;
 }
 
+/* The progress line's pace: when this batch's loop started, and how many
+ * fabrics were done before it (a --resume). */
+static struct timespec progress_t0;
+static int progress_done0;
+
+static void progress_start(const batch *b)
+{
+    clock_gettime(CLOCK_MONOTONIC, &progress_t0);
+    progress_done0 = b->n_done;
+}
+
 static void progress(const batch *b, int last)
 {
     if (!b->progress) return;
-    fprintf(stderr, "\rdrape batch: %d/%d done, %d failed, %d running ", b->n_done, b->n,
-            b->n_bad, b->n_running);
-    if (last) fputc('\n', stderr);
+    int left = b->n - b->n_done, ran = b->n_done - progress_done0;
+    fprintf(stderr, "\rdrape batch: %d/%d done, %d failed, %d running, %d left", b->n_done, b->n,
+            b->n_bad, b->n_running, left);
+    if (left > 0 && ran > 0) { /* what is left, at this batch's pace so far */
+        struct timespec tn;
+        clock_gettime(CLOCK_MONOTONIC, &tn);
+        double el = (double)(tn.tv_sec - progress_t0.tv_sec) +
+                    1e-9 * (double)(tn.tv_nsec - progress_t0.tv_nsec);
+        fprintf(stderr, ", about %.0f s to go", el * left / ran);
+    }
+    fputs(last ? "\n" : " ", stderr);
 }
 
 static void kill_running(batch *b)
@@ -555,7 +575,7 @@ int drape_cli_batch(int argc, char **argv)
      * row) */
     drape_scene s;
     /* strict: the scene's own fabric must exist too (a scene file with a
-     * dangling fabric is bad input for check, run and batch alike, issue 7) */
+     * dangling fabric is bad input for check, run and batch alike) */
     if (drape_scene_load(b.scene, &s, &err, NULL, NULL) != 0) goto fail;
     if (ra.spacing > 0.0) { /* as each run applies it */
         s.spacing = ra.spacing;
@@ -640,6 +660,7 @@ int drape_cli_batch(int argc, char **argv)
     setenv("DRAPE_SIGNAL_FORWARDED", "1", 1);
 
     int next = 0, warned = 0, killed = 0;
+    progress_start(&b);
     for (;;) {
         while (!got_sigint && !got_sigterm && b.n_running < jobs && next < b.n) {
             job *jb = &b.jobs[next++];

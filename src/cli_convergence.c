@@ -1,5 +1,5 @@
 /* cli_convergence.c: `drape run --convergence`, the answer to "is this
- * spacing fine enough?" (MODEL.md 6, "Converged in the spacing";
+ * spacing fine enough?" (docs/model.md 6, "Converged in the spacing";
  * docs/convergence.md).
  *
  * The same specimens (scene, fabric, options, seeds) run first at the
@@ -10,7 +10,7 @@
  *   dc_spacing_delta       mean DC at the spacing - mean DC at the coarser
  *   dc_spacing_delta_ci95  the 95 % half-width of that difference (Welch)
  *   nodes_spacing_p        the exact test of the two node histograms
- * The spacing is converged in MODEL.md's sense where refining it moves the
+ * The spacing is converged in the model's (docs/model.md) sense where refining it moves the
  * mean by less than 0.01 and leaves the histogram indistinguishable at
  * 5 %; a lab that sees |dc_spacing_delta| > 0.01 (or nodes_spacing_p <
  * 0.05) runs again at a finer spacing.  A loop above the ensemble: neither
@@ -116,6 +116,7 @@ int drape_cli_convergence_run(const run_args *a)
     ca.csv = 0;
     ca.text = 0; /* JSON on the pipe, whatever the terminal */
     ca.quiet = 1;
+    ca.no_warnings = 1; /* the input's warnings once, from the fine ensemble */
     int g = 0;
     while (g < ca.n_given && strcmp(ca.given_name[g], "spacing") != 0) g++;
     if (g < RUN_GIVEN_MAX) {

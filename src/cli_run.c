@@ -3,9 +3,9 @@
  * solve, measure, and print one JSON object (or a CSV header and row) on
  * stdout.  Frames (OBJ, HDF5 + XDMF) are written only with --out DIR.
  * Progress goes to stderr only when it is a terminal.  Keys of the result
- * are a contract (issue 3).
+ * are a contract.
  *
- * Interruption and resume (issue 7; docs/reliability.md): SIGINT and
+ * Interruption and resume (docs/reliability.md): SIGINT and
  * SIGTERM set a flag (the handler does nothing else) that the driver polls
  * at every output point and every right-hand side evaluation checks; the
  * run then ends at the last output point with status interrupted,
@@ -64,32 +64,32 @@ const char *const drape_cli_run_keys[] = {
     "factorizations", "certified", "min_pivot_N_m", "omega_min_rad_s",
     "max_force_rel", "linear_solver", "lin_iters", "lin_factors", "mean_speed_m_s",
     "integrator_switches", "max_order",
-    /* issue 15: repeated specimens (cli_specimens.c) and the fall method */
+    /* repeated specimens (cli_specimens.c) and the fall method */
     "cpu_s", "dc_sd", "dc_ci95", "dc_mode", "nodes_hist", "specimens",
     "specimens_failed", "seed", "fall_time_s", "fall_step_s",
-    /* issue 16: the animate method's step; the energy balance of dynamic runs */
+    /* the animate method's step; the energy balance of dynamic runs */
     "step_s", "substeps", "energy_total_start_J", "energy_total_end_J",
     "energy_max_rise_J", "max_strain_peak", "energy_rescales",
-    /* issue 18: the energy terms the model was built with, joined by `+`
+    /* the energy terms the model was built with, joined by `+`
      * (bias only where the fabric gives a bias curve) */
     "terms",
-    /* ninth session: when the fall ended (it goes on while the cloth swings) */
+    /* when the fall ended (it goes on while the cloth swings) */
     "fall_end_s",
-    /* eleventh session: the fall's error control (--fall-tol), and its steps */
+    /* the fall's error control (--fall-tol), and its steps */
     "fall_tol_m", "fall_steps",
-    /* thirteenth session: the shear damping (damping.shear, --damping-shear) */
+    /* the shear damping (damping.shear, --damping-shear) */
     "damping_shear_s",
-    /* sixteenth session: energy the fall's integrator created */
+    /* energy the fall's integrator created, and whether the fall was redone */
     "energy_gain_J", "fall_redone",
-    /* seventeenth session: the fall's fold phase at half its step */
+    /* the fall's fold phase at half its step */
     "fall_fold_time_s", "fall_fold_step_s",
-    /* nineteenth session: a refused longer step of the fall tried again */
+    /* a refused longer step of the fall tried again */
     "fall_retry_s", "fall_refused",
-    /* twenty-second session: a fall ended because it kept gaining energy */
+    /* a fall ended because it kept gaining energy */
     "fall_pumped",
-    /* twenty-third session: where a redone fall was taken up again */
+    /* where a redone fall was taken up again */
     "fall_redo_from_s",
-    /* the perturbation that ran (MODEL.md 2): its form, RMS height (field)
+    /* the perturbation that ran (docs/model.md 2): its form, RMS height (field)
      * or half range (particle), and the field's band of wavelengths */
     "perturbation_kind", "perturbation_amplitude_m", "perturbation_lambda_min_m",
     "perturbation_lambda_max_m",
@@ -113,6 +113,8 @@ typedef struct run_ctx {
     int frame;
     int progress; /* print progress on stderr */
     double t_max;
+    int has_eq;      /* the run ends at equilibrium: speed below eq_speed */
+    double eq_speed; /* m/s */
     /* the energy balance over the output points (dynamic runs): total
      * E = kinetic + potential (gravity included); no work is done on the
      * cloth (supports are fixed), so E should never rise */
@@ -144,8 +146,15 @@ static int observe(void *ctx, const drape_sim_event *ev, drape_error *err)
     run_ctx *c = ctx;
     energy_balance(c, ev);
     if (c->progress) {
-        fprintf(stderr, "\rdrape: t = %8.4f s of %g s, %ld steps, max speed %.3g m/s ",
-                ev->t, c->t_max, ev->steps, ev->max_speed);
+        /* what is left: the speed still to lose, or the simulated time */
+        if (c->has_eq)
+            fprintf(stderr,
+                    "\rdrape: t = %.4f s, %ld steps, max speed %.2e m/s, at rest below %.0e m/s"
+                    " (stops by t = %g s) ",
+                    ev->t, ev->steps, ev->max_speed, c->eq_speed, c->t_max);
+        else
+            fprintf(stderr, "\rdrape: t = %.4f s, %ld steps, %.4g s left to t = %g s ", ev->t,
+                    ev->steps, c->t_max - ev->t, c->t_max);
         if (ev->what & DRAPE_SIM_AT_END) fputc('\n', stderr);
     }
     if (!(ev->what & (DRAPE_SIM_AT_START | DRAPE_SIM_AT_FRAME | DRAPE_SIM_AT_END)))
@@ -551,6 +560,8 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
     rc.model = m;
     rc.progress = !quiet && isatty(STDERR_FILENO);
     rc.t_max = s.t_max;
+    rc.has_eq = s.has_equilibrium;
+    rc.eq_speed = s.eq_speed;
     rc.frame = ri ? ri->frames : 0;
     if (ri) { /* the energy balance covers the whole run, as the counters do */
         double e0 = ck_stat(ri, "energy_total_start_J"), e1 = ck_stat(ri, "energy_total_end_J");
@@ -697,7 +708,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
                                                              s.max_order);
         drape_cli_result_int(&r, "max_order", bdf > 0 ? bdf : NAN);
     }
-    /* added (issue 15): the ensemble's keys; for one specimen, its own */
+    /* the ensemble's keys; for one specimen, its own */
     drape_cli_specimen one;
     memset(&one, 0, sizeof one);
     one.seed = s.perturb_seed;
@@ -885,7 +896,7 @@ int drape_cli_run_one(const run_args *ra, run_child *child)
         if (drape_cli_write_shadow(out_dir, &s, &sv, 1, &r, &err) != 0) goto fail;
     }
     /* drape.h5 and drape.xmf are renamed into place only now, so that a
-     * picture that cannot be written leaves neither (issue 7) */
+     * picture that cannot be written leaves neither */
     if (rc.h5) {
         drape_h5 *h = rc.h5;
         rc.h5 = NULL;
@@ -957,7 +968,7 @@ nomem:
 fail:
     drape_cli_print_error(&err);
     status = drape_error_exit_status(err.kind);
-    /* a failed run leaves nothing of its own behind (issue 7) */
+    /* a failed run leaves nothing of its own behind */
     drape_obj_discard(rc.obj);
     rc.obj = NULL;
     drape_h5_discard(rc.h5);

@@ -1,4 +1,4 @@
-/* cli_specimens.c: repeated specimens (issue 15; MODEL.md 6; docs/ensemble.md).
+/* cli_specimens.c: repeated specimens (docs/model.md 6; docs/ensemble.md).
  *
  * A drape test of N specimens is a loop over single runs above the single
  * run: specimen k = 0 .. N-1 is the scene with perturbation seed
@@ -153,10 +153,10 @@ static void catch_ens_signals(const struct sigaction *old_int, const struct siga
 
 /* Start specimen c->k (seed): a new run, or with from_ck the run
  * continued from its checkpoint in its directory.  id: the ensemble's
- * (with --out), stored in its checkpoint; quiet_all: no specimen prints
- * the loaders' warnings (a resumed ensemble, as a resumed run). */
+ * (with --out), stored in its checkpoint.  No specimen prints the
+ * loaders' warnings: the input check before the specimens did. */
 static int launch(const run_args *a, child *c, unsigned long seed, const char *out_dir,
-                  const char *id, int from_ck, int quiet_all)
+                  const char *id, int from_ck)
 {
     int fd;
     pid_t pid = drape_cli_fork_pipe(&fd);
@@ -172,7 +172,7 @@ static int launch(const run_args *a, child *c, unsigned long seed, const char *o
         ca.seed = seed;
         ca.quiet = 1;
         ca.specimens = 1;
-        ca.no_warnings = quiet_all || c->k > 0; /* the first specimen prints them once */
+        ca.no_warnings = 1; /* the input check before the specimens printed them */
         ca.ensemble_id = id;
         char dir[4200];
         if (out_dir) {
@@ -563,7 +563,8 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         ca.check_only = 1;
         ca.specimens = 1;
         ca.quiet = 1;
-        ca.no_warnings = 1; /* the first specimen prints them */
+        /* the input's warnings once, here, not as a specimen's */
+        ca.no_warnings = a->no_warnings || resuming;
         int cst = drape_cli_run_one(&ca, NULL);
         if (cst != 0) return cst;
     }
@@ -699,7 +700,7 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
         while (!ens_stop && next < n && n_running < jobs) {
             child *c = &ch[next];
             if (launch(a, c, seed0 + (unsigned long)next, a->out_dir, m ? m->id : NULL,
-                       c->from_ck, resuming) != 0) {
+                       c->from_ck) != 0) {
                 drape_error_set(&err, DRAPE_E_IO, NULL, 0, 0, NULL,
                                 "cannot start a process for specimen %d: %s", next + 1,
                                 strerror(errno));
@@ -766,9 +767,17 @@ int drape_cli_specimens_drive(const run_args *a, ens_record *rm)
             }
             n_running--;
             n_done++;
-            if (progress)
-                fprintf(stderr, "\rdrape: specimen %d of %d done (seed %lu: %s), %d running ",
-                        n_done, n, seed0 + (unsigned long)k, spec_status(c), n_running);
+            if (progress) {
+                /* what is left, at this part's pace so far */
+                struct timespec tn;
+                clock_gettime(CLOCK_MONOTONIC, &tn);
+                double el = (double)(tn.tv_sec - t0.tv_sec) + 1e-9 * (double)(tn.tv_nsec - t0.tv_nsec);
+                int left = n - n_done, ran = n_done - n_stored; /* ran >= 1 here */
+                fprintf(stderr, "\rdrape: specimen %d of %d done (seed %lu: %s), %d running, %d left",
+                        n_done, n, seed0 + (unsigned long)k, spec_status(c), n_running, left);
+                if (left > 0 && ran > 0) fprintf(stderr, ", about %.0f s to go ", el * left / ran);
+                else fputc(' ', stderr);
+            }
         }
     }
     if (progress) fputc('\n', stderr);

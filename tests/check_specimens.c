@@ -1061,6 +1061,34 @@ START_TEST(test_bias_warnings_with_term)
 }
 END_TEST
 
+/* The input's warnings are the ensemble's, not a specimen's: printed once,
+ * without a specimen's prefix, however many specimens and ensembles
+ * (--convergence runs two) there are. */
+static int count_in(const char *hay, const char *needle)
+{
+    int n = 0;
+    for (const char *p = hay; (p = strstr(p, needle)) != NULL; p += strlen(needle)) n++;
+    return n;
+}
+
+START_TEST(test_ensemble_warnings_once)
+{
+    const char *runs[] = {
+        "run -q ../scenes/cusick.yaml --spacing 3cm --method static --specimens 3 -j 2 "
+        "--fabric ../fabrics/polyester-tablecloth-wang.yaml",
+        "run -q ../scenes/cusick.yaml --spacing 3cm --method static --specimens 2 -j 1 "
+        "--convergence --fabric ../fabrics/polyester-tablecloth-wang.yaml",
+    };
+    for (int r = 0; r < 2; r++) {
+        ck_assert_msg(tu_run_drape(runs[r], out, CAP, err, CAP) == 0, "%s", err);
+        ck_assert_msg(count_in(err, "bending: warning: the slope of the bending moment") == 1,
+                      "run %d: %s", r, err);
+        ck_assert_msg(count_in(err, "bending.bias: warning") == 1, "run %d: %s", r, err);
+        ck_assert_msg(strstr(err, "specimen 1 (seed") == NULL, "run %d: %s", r, err);
+    }
+}
+END_TEST
+
 /* drape run --convergence (docs/convergence.md): the same specimens at a
  * spacing sqrt(2) coarser.  Against the two ensembles run on their own:
  * dc_spacing_delta is the difference of their means, its 95 % half-width
@@ -1161,6 +1189,7 @@ Suite *specimens_suite(void)
     tcase_add_test(tc, test_convergence_option);
     tcase_add_test(tc, test_compare_distributions);
     tcase_add_test(tc, test_bias_warnings_with_term);
+    tcase_add_test(tc, test_ensemble_warnings_once);
     suite_add_tcase(s, tc);
     TCase *cmp = tcase_create("compare"); /* quick: no run */
     tcase_add_test(cmp, test_compare_number_range);
