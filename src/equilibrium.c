@@ -716,8 +716,8 @@ int drape_equilibrium_solve(drape_model *m, const double *x0,
         /* it gained energy: on from its lowest, error-controlled.  Against
          * a second fall from the flat start, from the lowest state the
          * table's three pumping specimens of 32 at 1 cm cost 15-20 CPU s
-         * instead of 31-42, with the same histogram and mean within 0.001 (docs/ensemble.md, "Taking the
-         * pumping fall up again where its energy was lowest") */
+         * instead of 31-42, with the same histogram and mean within 0.001
+         * (docs/ensemble.md, "Energy gained by the fixed-step fall") */
         if (rcd == 3) {
             drape_equilibrium_opts o2 = o;
             o2.dyn_tol = o.dyn_redo_tol;

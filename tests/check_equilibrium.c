@@ -860,8 +860,7 @@ END_TEST
 
 /* The guard on the longer step after the fold phase refuses it when it
  * raises the total energy by more than 1 % of the peak kinetic energy
- * (equilibrium.h, docs/ensemble.md, "A guard on the step after the fold
- * phase"), whether or not the swing criterion (dyn_ke_frac) is on: that
+ * (equilibrium.h, docs/ensemble.md, "The fold phase"), whether or not the swing criterion (dyn_ke_frac) is on: that
  * criterion acts only past dyn_time, so a fall that ends at dyn_time
  * (dyn_time_max = dyn_time) is the same with it as without it.  The chain
  * released horizontally, 0.1 s at 1 ms then 0.3 s at 2 ms: 100 + 150
